@@ -1,0 +1,34 @@
+# The two commands: `make book` (build the whole study) and `make test`.
+# Both create the virtual environment on first use; everything else lives in the `study` package.
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+PRESET ?= paper
+export MUJOCO_GL ?= egl
+export PYTHONHASHSEED := 0
+
+.PHONY: book test bench install clean
+
+$(BIN)/.installed: requirements.txt pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -r requirements.txt
+	$(BIN)/python -m pip install --quiet --no-deps --no-build-isolation -e .
+	touch $@
+
+install: $(BIN)/.installed
+
+## Execute every chapter with papermill (PRESET=paper by default) and build the HTML book in _build/html.
+book: $(BIN)/.installed
+	$(BIN)/study book --preset $(PRESET)
+
+## Unit tests and smoke runs of the real entry points (smoke presets).
+test: $(BIN)/.installed
+	$(BIN)/python -m pytest
+
+## Benchmarks: each prints a ratio against a plain baseline measured in the same run.
+bench: $(BIN)/.installed
+	@for b in benchmarks/bench_*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done
+
+clean:
+	rm -rf _build
