@@ -85,7 +85,87 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_synth, _add_book]
+# study.train.TrainConfig's defaults, repeated so that `study --help` need not import torch (2-3 s);
+# tests/test_train.py checks that the two agree.
+_TRAIN_DEFAULTS = argparse.Namespace(seed=0, cell="peephole", max_epochs=60, lr=3e-3, batch_size=64,
+                                     truncation=90, dropout=0.2, patience=10)
+
+
+def _add_train(sub: argparse._SubParsersAction) -> None:
+    d = _TRAIN_DEFAULTS
+    p = sub.add_parser(
+        "train",
+        help="train the paper's classifier on a dataset file and save it as a model directory",
+        description=(
+            "Train the light/heavy classifier (2 x 64 peephole LSTM, dropout, softmax on the last "
+            "frame) on the train split of a dataset file, early-stopping on a seeded validation part "
+            "of it; the test split is not touched. Deterministic for a given seed. Writes the model "
+            "directory (weights, config, normalisation, history, data key) atomically."
+        ),
+    )
+    p.add_argument("--data", type=Path, required=True, help="dataset file (.npz) written by `study synth`")
+    p.add_argument("--dims", choices=["xyz", "z"], required=True, help="input coordinates: all three, or the height only")
+    p.add_argument("--length", type=float, required=True, metavar="SECONDS",
+                   help="input length: the first SECONDS of every trajectory (must not exceed the data)")
+    p.add_argument("--seed", type=int, default=d.seed, help="seed of the split, weights, batches, dropout (default: %(default)s)")
+    p.add_argument("--cell", choices=["peephole", "lstm", "gru"], default=d.cell,
+                   help="recurrent cell: the paper's peephole LSTM, nn.LSTM or nn.GRU (default: %(default)s)")
+    p.add_argument("--epochs", type=int, default=d.max_epochs, help="most epochs; early stopping may end sooner (default: %(default)s)")
+    p.add_argument("--lr", type=float, default=d.lr, help="Adam learning rate (default: %(default)s)")
+    p.add_argument("--batch-size", type=int, default=d.batch_size, help="trajectories per step (default: %(default)s)")
+    p.add_argument("--truncation", type=int, default=d.truncation, metavar="FRAMES",
+                   help="truncated BPTT: the loss back-propagates through at most this many last frames (default: %(default)s)")
+    p.add_argument("--dropout", type=float, default=d.dropout,
+                   help="probability of dropping a unit before the softmax; 0.2 = the paper's keep-probability 0.8 (default: %(default)s)")
+    p.add_argument("--patience", type=int, default=d.patience, help="early-stopping patience in epochs (default: %(default)s)")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="model directory to write (replaced if it exists)")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+    def run(a: argparse.Namespace) -> int:
+        import json
+
+        from study import data, train
+
+        ds = data.load(a.data)
+        cfg = train.TrainConfig(dims=a.dims, length=a.length, seed=a.seed, cell=a.cell, max_epochs=a.epochs, lr=a.lr,
+                          batch_size=a.batch_size, truncation=a.truncation, dropout=a.dropout, patience=a.patience)
+        tm = train.fit(ds, cfg, progress=not a.no_progress)
+        tm.save(a.out)
+        print(json.dumps({"model": str(a.out), "best_epoch": tm.best_epoch, "val_accuracy": tm.val_accuracy}))
+        return 0
+
+    p.set_defaults(run=run)
+
+
+def _add_evaluate(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "evaluate",
+        help="score a trained model on a dataset's test split; prints JSON",
+        description=(
+            "Load a model directory written by `study train` and score it on the test split of a "
+            "dataset file. Prints JSON: accuracy, per-class accuracy, the confusion matrix (rows: "
+            "true class, columns: predicted; classes in the order given), and the data keys."
+        ),
+    )
+    p.add_argument("--model", type=Path, required=True, metavar="DIR", help="model directory written by `study train`")
+    p.add_argument("--data", type=Path, required=True, help="dataset file (.npz) written by `study synth`")
+
+    def run(a: argparse.Namespace) -> int:
+        import json
+
+        from study import data, train
+
+        tm = train.load(a.model)
+        ds = data.load(a.data)
+        res = train.evaluate(tm, ds.test)
+        res.update(model=str(a.model), data=str(a.data), data_key=ds.key, trained_on=tm.data_key)
+        print(json.dumps(res, indent=1))
+        return 0
+
+    p.set_defaults(run=run)
+
+
+COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_synth, _add_book, _add_train, _add_evaluate]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,230 @@
+"""The experiments behind Table 1 and the accuracy-versus-length figure, cached run by run.
+
+Each trained run's result (metrics and training history, not weights) is a JSON file in
+``data_dir/runs/``, named by :func:`study.cache.key` of the dataset key, the :class:`TrainConfig`,
+whether the test split was scored, the source of ``study.model`` and ``study.train`` and the torch
+version; it is written atomically. Re-building the book therefore never retrains a run whose inputs
+did not change, and editing a preset only trains the runs it adds.
+
+The chapters call, in order:
+
+1. :func:`grid` -- the paper's grid search, on Z only, scored on the validation split (the test split
+   is not looked at); :func:`best_config` picks the highest validation accuracy.
+2. :func:`seed_runs` -- the chosen config for Z and XYZ with several seeds, scored on the test split.
+3. :func:`length_sweep` -- accuracy against input length for Z and XYZ (the paper's Figure 4).
+4. :func:`ablation` -- peephole LSTM vs ``nn.LSTM`` vs GRU at the chosen config, same seeds.
+5. :func:`baseline_runs` -- the physics baseline of :mod:`study.baseline`, same split.
+
+Every function returns a tidy list of dicts (one row per run), ready for ``pandas.DataFrame``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from tqdm.auto import tqdm
+
+from study import baseline, cache, train
+from study.data import Dataset
+from study.errors import ConfigError
+from study.train import TrainConfig
+
+RUN_FORMAT = "study.run/1"
+
+
+@dataclass(frozen=True)
+class Preset:
+    """How much of each experiment to run."""
+
+    name: str
+    """'smoke' or 'paper'."""
+    length: float
+    """Input length for Table 1, the grid and the ablation, seconds."""
+    lrs: tuple[float, ...]
+    """Grid: Adam learning rates."""
+    truncations: tuple[int, ...]
+    """Grid: truncated-BPTT lengths, frames."""
+    dropouts: tuple[float, ...]
+    """Grid: dropout probabilities (0.2 = the paper's keep-probability 0.8)."""
+    batch_sizes: tuple[int, ...]
+    """Grid: trajectories per step."""
+    seeds: tuple[int, ...]
+    """Seeds for Table 1 and the ablation."""
+    lengths: tuple[float, ...]
+    """Input lengths of the length sweep, seconds."""
+    length_seeds: tuple[int, ...]
+    """Seeds per point of the length sweep."""
+    max_epochs: int
+    """Epoch cap of every run."""
+    patience: int
+    """Early-stopping patience of every run, epochs."""
+    grid_seed: int = 0
+    """The seed of every grid run."""
+    cells: tuple[str, ...] = ("peephole", "lstm", "gru")
+    """Cells compared in the ablation."""
+    ablation_dims: str = "z"
+    """Input dims of the ablation (the grid's, as in the paper's search)."""
+
+    def base_config(self) -> TrainConfig:
+        """The config every run starts from, before the grid values are set."""
+        return TrainConfig(dims="z", length=self.length, max_epochs=self.max_epochs, patience=self.patience)
+
+    @property
+    def n_grid(self) -> int:
+        """Number of grid points."""
+        return len(self.lrs) * len(self.truncations) * len(self.dropouts) * len(self.batch_sizes)
+
+
+PRESETS: dict[str, Preset] = {
+    # Whole chapter in seconds on the smoke dataset: 2 grid points, 2 seeds, 3 lengths, 3 epochs.
+    "smoke": Preset(
+        name="smoke", length=1.0, lrs=(3e-3,), truncations=(10, 30), dropouts=(0.2,), batch_sizes=(32,),
+        seeds=(0, 1), lengths=(0.5, 1.0, 1.5), length_seeds=(0, 1), max_epochs=3, patience=2,
+    ),
+    # The real thing, sized for the 2-core budget: 2x2x2x2 grid on Z at 3 s (90 frames); 5 seeds;
+    # 8 lengths x 3 seeds x 2 dims; ablation 2 more cells x 5 seeds. About 70 trained models.
+    "paper": Preset(
+        name="paper", length=3.0, lrs=(1e-3, 3e-3), truncations=(30, 90), dropouts=(0.2, 0.5),
+        batch_sizes=(32, 128), seeds=(0, 1, 2, 3, 4), lengths=(0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0),
+        length_seeds=(0, 1, 2), max_epochs=30, patience=5,
+    ),
+}
+
+
+def preset(name: str) -> Preset:
+    """The preset called ``name``; :class:`ConfigError` for an unknown one."""
+    if name not in PRESETS:
+        raise ConfigError(f"preset = {name!r} is unknown; use one of {sorted(PRESETS)}")
+    return PRESETS[name]
+
+
+def run_key(dataset: Dataset, cfg: TrainConfig, test: bool) -> str:
+    """The cache key of one trained run."""
+    return cache.key({
+        "format": RUN_FORMAT, "data": dataset.key, "config": dataclasses.asdict(cfg), "test": test,
+        "code": cache.source_hash("model", "train"), "torch": torch.__version__,
+    })
+
+
+def run(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data", test: bool = True) -> dict[str, Any]:
+    """Train ``cfg`` on ``dataset`` (or read the cached result) and return its record.
+
+    The record holds the config, the validation accuracy and loss at the kept epoch, the epochs run,
+    the history, the training time and, if ``test``, the test metrics of :func:`study.train.evaluate`.
+    A dataset without a key is never cached.
+    """
+    key = run_key(dataset, cfg, test)
+    path = Path(data_dir) / "runs" / f"{key}.json"
+    if dataset.key and path.is_file():
+        try:
+            record = json.loads(path.read_text())
+            if record.get("key") == key:
+                return record
+        except (OSError, json.JSONDecodeError, UnicodeDecodeError):
+            pass  # a damaged entry is retrained and overwritten
+    t0 = time.perf_counter()
+    tm = train.fit(dataset, cfg, progress=False)
+    record = {
+        "key": key, "format": RUN_FORMAT, "data_key": dataset.key, "config": dataclasses.asdict(cfg),
+        "val_accuracy": tm.val_accuracy, "val_loss": tm.history[tm.best_epoch]["val_loss"],
+        "best_epoch": tm.best_epoch, "epochs_run": len(tm.history), "history": tm.history,
+        "train_seconds": time.perf_counter() - t0,
+        "test": train.evaluate(tm, dataset.test) if test else None,
+    }
+    if dataset.key:
+        cache.write_text_atomic(path, json.dumps(record, indent=1) + "\n")
+    return record
+
+
+def _runs(dataset: Dataset, cfgs: list[TrainConfig], data_dir: str | Path, test: bool, desc: str, progress: bool) -> list[dict]:
+    return [run(dataset, c, data_dir, test) for c in tqdm(cfgs, desc=desc, disable=not progress)]
+
+
+def _row(rec: dict[str, Any], *fields: str) -> dict[str, Any]:
+    """A tidy row: the named config fields, then the run's headline numbers."""
+    row = {f: rec["config"][f] for f in fields}
+    row.update(val_accuracy=rec["val_accuracy"], val_loss=rec["val_loss"], epochs=rec["epochs_run"],
+               seconds=rec["train_seconds"])
+    if rec["test"] is not None:
+        row.update(accuracy=rec["test"]["accuracy"],
+                   **{f"accuracy_{c}": a for c, a in rec["test"]["per_class_accuracy"].items()})
+    return row
+
+
+def grid(dataset: Dataset, p: Preset, data_dir: str | Path = "data", progress: bool = True) -> list[dict]:
+    """The grid search on Z: one row per (lr, truncation, dropout, batch_size), validation scores only."""
+    base = p.base_config()
+    cfgs = [
+        dataclasses.replace(base, lr=lr, truncation=k, dropout=d, batch_size=b, seed=p.grid_seed)
+        for lr, k, d, b in itertools.product(p.lrs, p.truncations, p.dropouts, p.batch_sizes)
+    ]
+    recs = _runs(dataset, cfgs, data_dir, False, "grid (Z)", progress)
+    return [_row(r, "lr", "truncation", "dropout", "batch_size") for r in recs]
+
+
+def best_config(rows: list[dict], p: Preset) -> TrainConfig:
+    """The grid point with the highest validation accuracy (ties: lower validation loss, then grid order)."""
+    best = min(rows, key=lambda r: (-r["val_accuracy"], r["val_loss"]))
+    return dataclasses.replace(p.base_config(), lr=best["lr"], truncation=best["truncation"],
+                               dropout=best["dropout"], batch_size=best["batch_size"])
+
+
+def seed_runs(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True) -> list[dict]:
+    """The chosen config for Z and XYZ, one row per (dims, seed), with test accuracy."""
+    cfgs = [dataclasses.replace(cfg, dims=d, seed=s) for d in ("z", "xyz") for s in p.seeds]
+    return [_row(r, "dims", "seed") for r in _runs(dataset, cfgs, data_dir, True, "seeds", progress)]
+
+
+def length_sweep(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True) -> list[dict]:
+    """Accuracy against input length: one row per (dims, length, seed) at the chosen config."""
+    cfgs = [dataclasses.replace(cfg, dims=d, length=L, seed=s)
+            for d in ("z", "xyz") for L in p.lengths for s in p.length_seeds]
+    rows = [_row(r, "dims", "length", "seed") for r in _runs(dataset, cfgs, data_dir, True, "lengths", progress)]
+    for r in rows:
+        r["frames"] = train.TrainConfig(length=r["length"]).n_frames(dataset.fps)
+    return rows
+
+
+def ablation(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True) -> list[dict]:
+    """Peephole LSTM vs nn.LSTM vs GRU at the chosen config on ``p.ablation_dims``, same seeds."""
+    cfgs = [dataclasses.replace(cfg, dims=p.ablation_dims, cell=c, seed=s) for c in p.cells for s in p.seeds]
+    return [_row(r, "cell", "dims", "seed") for r in _runs(dataset, cfgs, data_dir, True, "ablation", progress)]
+
+
+def baseline_runs(dataset: Dataset, p: Preset) -> list[dict]:
+    """The physics baseline for Z and XYZ at ``p.length``: one row per dims (it has no seed)."""
+    rows = []
+    for d in ("z", "xyz"):
+        m = baseline.fit(dataset, d, p.length)
+        res = baseline.evaluate(m, dataset.test)
+        rows.append({"dims": d, "accuracy": res["accuracy"],
+                     **{f"accuracy_{c}": a for c, a in res["per_class_accuracy"].items()},
+                     "coefficients": m.coefficients})
+    return rows
+
+
+def summarise(rows: list[dict], by: tuple[str, ...], value: str = "accuracy") -> list[dict]:
+    """Group ``rows`` by the ``by`` fields: n, mean, sample std (ddof=1; 0 for one run), min, best of ``value``."""
+    groups: dict[tuple, list[float]] = {}
+    for r in rows:
+        groups.setdefault(tuple(r[b] for b in by), []).append(float(r[value]))
+    out = []
+    for k, v in groups.items():
+        a = np.asarray(v)
+        out.append({**dict(zip(by, k)), "n": len(a), "mean": float(a.mean()),
+                    "std": float(a.std(ddof=1)) if len(a) > 1 else 0.0,
+                    "min": float(a.min()), "best": float(a.max())})
+    return out
+
+
+def n_models(p: Preset) -> int:
+    """How many models a full run of the preset trains (before cache sharing between experiments)."""
+    return p.n_grid + 2 * len(p.seeds) + 2 * len(p.lengths) * len(p.length_seeds) + (len(p.cells) - 1) * len(p.seeds)

@@ -1,0 +1,199 @@
+"""The paper's classifier: two layers of peephole LSTM, dropout, and a softmax on the last hidden state.
+
+PyTorch's ``nn.LSTM`` has no peepholes, so :class:`PeepholeLSTM` writes the layer out. Gates follow
+Gers et al. (2002) and Sak et al. (2014), with diagonal peephole weights (one vector per gate)::
+
+    i_t = sigmoid(W_xi x_t + W_hi h_{t-1} + w_ci * c_{t-1} + b_i)     input gate sees the old cell
+    f_t = sigmoid(W_xf x_t + W_hf h_{t-1} + w_cf * c_{t-1} + b_f)     forget gate sees the old cell
+    g_t = tanh   (W_xg x_t + W_hg h_{t-1}                  + b_g)
+    c_t = f_t * c_{t-1} + i_t * g_t
+    o_t = sigmoid(W_xo x_t + W_ho h_{t-1} + w_co * c_t     + b_o)     output gate sees the new cell
+    h_t = o_t * tanh(c_t)
+
+The gate order (i, f, g, o) and weight layout match ``nn.LSTM``, so with zero peepholes and
+``bias = bias_ih + bias_hh`` the two compute the same function (tested).
+
+:class:`Classifier` is the paper's network. Its inputs are raw trajectories in metres; it divides each
+input dimension by the standard deviation measured on the training split (buffers ``scale``, set by
+:meth:`Classifier.set_scale`), so the statistics travel with the weights.
+
+Shapes: B batch, T frames, D input dims (1 for Z, 3 for XYZ), H hidden units, L layers.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+from study.errors import ConfigError
+
+CELLS = ("peephole", "lstm", "gru")
+"""Recurrent cells the classifier offers: the paper's peephole LSTM, ``nn.LSTM``, ``nn.GRU``."""
+
+# A layer's state is (h, c) for the LSTMs, h alone for the GRU; the classifier's state is whatever its
+# recurrent core takes: a list of per-layer (h, c) for the peephole stack, nn.LSTM's or nn.GRU's own.
+State = object
+
+
+class PeepholeLSTM(nn.Module):
+    """One peephole LSTM layer over a batch-first sequence (see the module docstring for the gates)."""
+
+    def __init__(self, input_size: int, hidden_size: int) -> None:
+        super().__init__()
+        H = hidden_size
+        self.input_size, self.hidden_size = input_size, hidden_size
+        self.weight_ih = nn.Parameter(torch.empty(4 * H, input_size))  # rows: i, f, g, o
+        self.weight_hh = nn.Parameter(torch.empty(4 * H, H))
+        self.bias = nn.Parameter(torch.empty(4 * H))
+        self.w_ci = nn.Parameter(torch.empty(H))  # peepholes: diagonal, one weight per unit
+        self.w_cf = nn.Parameter(torch.empty(H))
+        self.w_co = nn.Parameter(torch.empty(H))
+        self.reset_parameters()
+
+    def reset_parameters(self) -> None:
+        """Uniform(-1/sqrt(H), 1/sqrt(H)) for every weight, as ``nn.LSTM`` initialises."""
+        bound = 1.0 / math.sqrt(self.hidden_size)
+        for p in self.parameters():
+            nn.init.uniform_(p, -bound, bound)
+
+    def init_state(self, batch: int, like: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Zero (h, c), each (B, H), with ``like``'s dtype and device."""
+        z = like.new_zeros(batch, self.hidden_size)
+        return z, z.clone()
+
+    def cell(
+        self, xw_t: torch.Tensor, h: torch.Tensor, c: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """One time step, given the input already projected: ``xw_t = W_ih x_t + b``, (B, 4H)."""
+        gates = torch.addmm(xw_t, h, self.weight_hh.t())  # (B, 4H)
+        i, f, g, o = gates.chunk(4, dim=1)  # each (B, H)
+        i = torch.sigmoid(i + self.w_ci * c)
+        f = torch.sigmoid(f + self.w_cf * c)
+        c = f * c + i * torch.tanh(g)
+        o = torch.sigmoid(o + self.w_co * c)
+        h = o * torch.tanh(c)
+        return h, c
+
+    def forward(
+        self, x: torch.Tensor, state: tuple[torch.Tensor, torch.Tensor] | None = None
+    ) -> tuple[torch.Tensor, tuple[torch.Tensor, torch.Tensor]]:
+        """Run the layer over ``x`` (B, T, D); return all hidden states (B, T, H) and the final (h, c)."""
+        B, T, _ = x.shape
+        h, c = self.init_state(B, x) if state is None else state
+        xw = F.linear(x, self.weight_ih, self.bias)  # (B, T, 4H): input projection, one matmul for all t
+        hs = []
+        for t in range(T):
+            h, c = self.cell(xw[:, t], h, c)
+            hs.append(h)
+        return torch.stack(hs, dim=1), (h, c)  # (B, T, H)
+
+
+def peephole_reference(
+    layer: PeepholeLSTM, x: torch.Tensor, state: tuple[torch.Tensor, torch.Tensor] | None = None
+) -> tuple[torch.Tensor, tuple[torch.Tensor, torch.Tensor]]:
+    """The same layer written as plainly as possible: one sequence, one step, one gate at a time.
+
+    For tests only (slow). ``x`` (B, T, D) -> hidden states (B, T, H) and the final (h, c).
+    """
+    H = layer.hidden_size
+    W_x = layer.weight_ih.split(H)  # W_xi, W_xf, W_xg, W_xo, each (H, D)
+    W_h = layer.weight_hh.split(H)  # each (H, H)
+    b = layer.bias.split(H)  # each (H,)
+    outs, hs_last, cs_last = [], [], []
+    for n in range(x.shape[0]):
+        h = x.new_zeros(H) if state is None else state[0][n]
+        c = x.new_zeros(H) if state is None else state[1][n]
+        seq = []
+        for t in range(x.shape[1]):
+            xt = x[n, t]
+            i = torch.sigmoid(W_x[0] @ xt + W_h[0] @ h + layer.w_ci * c + b[0])
+            f = torch.sigmoid(W_x[1] @ xt + W_h[1] @ h + layer.w_cf * c + b[1])
+            g = torch.tanh(W_x[2] @ xt + W_h[2] @ h + b[2])
+            c = f * c + i * g
+            o = torch.sigmoid(W_x[3] @ xt + W_h[3] @ h + layer.w_co * c + b[3])
+            h = o * torch.tanh(c)
+            seq.append(h)
+        outs.append(torch.stack(seq))
+        hs_last.append(h)
+        cs_last.append(c)
+    return torch.stack(outs), (torch.stack(hs_last), torch.stack(cs_last))
+
+
+class PeepholeStack(nn.Module):
+    """``layers`` peephole LSTM layers, each feeding the next; state is a list of per-layer (h, c)."""
+
+    def __init__(self, input_size: int, hidden_size: int, layers: int) -> None:
+        super().__init__()
+        sizes = [input_size] + [hidden_size] * (layers - 1)
+        self.layers = nn.ModuleList(PeepholeLSTM(d, hidden_size) for d in sizes)
+
+    def forward(self, x: torch.Tensor, state: list | None = None) -> tuple[torch.Tensor, list]:
+        """``x`` (B, T, D) -> last layer's hidden states (B, T, H) and the new per-layer states."""
+        new_state = []
+        for k, layer in enumerate(self.layers):
+            x, s = layer(x, None if state is None else state[k])  # (B, T, H)
+            new_state.append(s)
+        return x, new_state
+
+
+class Classifier(nn.Module):
+    """Trajectory -> P(light), P(heavy): recurrent layers, dropout, linear + softmax on the last step.
+
+    ``dropout`` is the probability of *dropping* a unit of the last hidden state. The paper says
+    "dropout ... with rate 0.8"; its TensorFlow code (``tf.nn.dropout(x, keep_prob)``) most likely meant
+    keep-probability 0.8, i.e. ``dropout = 0.2``, the default here.
+    """
+
+    def __init__(
+        self, n_inputs: int, hidden: int = 64, layers: int = 2, dropout: float = 0.2, cell: str = "peephole"
+    ) -> None:
+        super().__init__()
+        if cell not in CELLS:
+            raise ConfigError(f"cell = {cell!r} is not a known cell; use one of {CELLS}")
+        self.cell_type = cell
+        self.register_buffer("scale", torch.ones(n_inputs))  # (D,) train-set std of each input dim
+        if cell == "peephole":
+            self.rnn = PeepholeStack(n_inputs, hidden, layers)
+        elif cell == "lstm":
+            self.rnn = nn.LSTM(n_inputs, hidden, layers, batch_first=True)
+        else:
+            self.rnn = nn.GRU(n_inputs, hidden, layers, batch_first=True)
+        self.drop = nn.Dropout(dropout)
+        self.head = nn.Linear(hidden, 2)
+
+    def set_scale(self, std: torch.Tensor) -> None:
+        """Store the training split's per-dimension standard deviation (D,), metres."""
+        self.scale.copy_(std)
+
+    def encode(self, x: torch.Tensor, state: State | None = None) -> tuple[torch.Tensor, State]:
+        """Raw ``x`` (B, T, D) metres -> last layer's hidden states (B, T, H) and the carried state."""
+        return self.rnn(x / self.scale, state)
+
+    def logits(self, h_last: torch.Tensor) -> torch.Tensor:
+        """Last hidden state (B, H) -> class logits (B, 2), with dropout in training mode."""
+        return self.head(self.drop(h_last))
+
+    def forward(self, x: torch.Tensor, state: State | None = None) -> torch.Tensor:
+        """``x`` (B, T, D) metres -> logits (B, 2) from the hidden state at the last frame."""
+        hs, _ = self.encode(x, state)
+        return self.logits(hs[:, -1])  # (B, 2)
+
+    def init_state(self, batch: int) -> State:
+        """The zero state for streaming ``batch`` trajectories with :meth:`step`."""
+        w = self.head.weight
+        if self.cell_type == "peephole":
+            return [layer.init_state(batch, w) for layer in self.rnn.layers]
+        h = w.new_zeros(self.rnn.num_layers, batch, self.rnn.hidden_size)
+        return (h, h.clone()) if self.cell_type == "lstm" else h
+
+    def step(self, x_t: torch.Tensor, state: State) -> tuple[torch.Tensor, State]:
+        """Consume one frame ``x_t`` (B, D) metres; return class probabilities (B, 2) and the new state.
+
+        Feeding a trajectory frame by frame gives, after frame t, the same probabilities as the whole
+        sequence cut at t (in eval mode).
+        """
+        hs, state = self.encode(x_t[:, None, :], state)  # (B, 1, H)
+        return F.softmax(self.logits(hs[:, -1]), dim=-1), state

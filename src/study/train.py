@@ -1,0 +1,342 @@
+"""Training, saving, loading and evaluating the classifier.
+
+``fit(dataset, cfg)`` trains on the dataset's train split only: a seeded permutation carves a
+validation split off it for early stopping, and the test split is left to :func:`evaluate`.
+
+Truncated back-propagation through time (Williams & Zipser's BPTT(k)): the only loss is the
+cross-entropy of the prediction at the last frame T. With ``truncation = k < T`` the first ``T - k``
+frames run under ``torch.no_grad()`` and only hand their state on, so the loss back-propagates
+through the last ``k`` frames at most; with ``k >= T`` it is full BPTT.
+
+Determinism: :func:`fit` seeds everything from ``cfg.seed`` (the split permutation with NumPy; the
+weights, batch order and dropout masks with torch, inside a forked RNG so the caller's RNG is left
+alone), turns on ``torch.use_deterministic_algorithms`` and runs on ``THREADS`` CPU threads, so the
+same config, seed and data give bitwise-identical weights on the same machine. One thread, because
+floating-point reductions may be split differently across thread counts, and because parallel
+experiments are better run as separate processes on this 2-core machine.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import dataclasses
+import json
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+from tqdm.auto import tqdm
+
+from study import CLASSES
+from study.data import Dataset, Split
+from study.errors import ConfigError, ModelError, TrajectoryError, check_range
+from study.model import CELLS, Classifier
+
+DIMS: dict[str, tuple[int, ...]] = {"z": (2,), "xyz": (0, 1, 2)}
+"""Input dimensions by name: columns of the (x, y, z) trajectory the model sees."""
+
+THREADS = 1
+"""CPU threads used by :func:`fit` (see the module docstring)."""
+
+FORMAT = "study.model/1"
+FILES = ("weights.pt", "config.json", "normalisation.json", "history.json", "meta.json")
+"""What a saved model directory holds."""
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything that determines a trained model, besides the data."""
+
+    dims: str = "xyz"
+    """Input dimensions: 'xyz' (all three coordinates) or 'z' (height only)."""
+    length: float = 3.0
+    """Input length T in seconds: the model sees the first ``length`` seconds of each trajectory."""
+    hidden: int = 64
+    """Units per recurrent layer (paper: 64)."""
+    layers: int = 2
+    """Recurrent layers (paper: 2)."""
+    dropout: float = 0.2
+    """Probability of dropping a unit of the last hidden state (paper's 'rate 0.8' read as keep-probability)."""
+    lr: float = 3e-3
+    """Adam learning rate."""
+    batch_size: int = 64
+    """Trajectories per gradient step."""
+    truncation: int = 90
+    """Truncated-BPTT length in frames: the loss back-propagates through at most this many last frames."""
+    max_epochs: int = 60
+    """Upper bound on passes over the training split."""
+    patience: int = 10
+    """Stop after this many epochs without a lower validation loss; the best epoch's weights are kept."""
+    val_fraction: float = 0.2
+    """Share of the training split held out for early stopping (and for the grid search)."""
+    seed: int = 0
+    """Seeds the validation split, the initial weights, the batch order and the dropout masks."""
+    cell: str = "peephole"
+    """Recurrent cell: 'peephole' (the paper's), 'lstm' (nn.LSTM) or 'gru' (nn.GRU)."""
+
+    def check(self) -> None:
+        """Raise :class:`ConfigError` naming the first field that is out of range."""
+        if self.dims not in DIMS:
+            raise ConfigError(f"TrainConfig.dims = {self.dims!r} is unknown; use 'xyz' or 'z'")
+        if self.cell not in CELLS:
+            raise ConfigError(f"TrainConfig.cell = {self.cell!r} is unknown; use one of {CELLS}")
+        check_range("TrainConfig.length (seconds)", self.length, 0, lo_open=True)
+        for name in ("hidden", "layers", "batch_size", "truncation", "max_epochs", "patience"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise ConfigError(f"TrainConfig.{name} = {value!r}; it must be a whole number >= 1")
+        check_range("TrainConfig.dropout", self.dropout, 0, 1, hi_open=True)
+        check_range("TrainConfig.lr", self.lr, 0, lo_open=True)
+        check_range("TrainConfig.val_fraction", self.val_fraction, 0, 1, lo_open=True, hi_open=True)
+
+    def n_frames(self, fps: float) -> int:
+        """T in frames at ``fps``: ``round(length * fps)``, at least 1."""
+        return max(1, round(self.length * fps))
+
+
+def select_inputs(x: np.ndarray, dims: str, n_frames: int, what: str = "trajectories") -> np.ndarray:
+    """First ``n_frames`` frames and the ``dims`` columns of ``x`` (n, T, 3) -> (n, n_frames, D) float32.
+
+    Raises :class:`TrajectoryError` for a wrong shape, too few frames, or NaN/infinite values.
+    """
+    x = np.asarray(x)
+    if x.ndim != 3 or x.shape[2] != 3:
+        raise TrajectoryError(f"{what}: shape {x.shape}; expected (n, T, 3) world x, y, z in metres")
+    if x.shape[1] < n_frames:
+        raise TrajectoryError(
+            f"{what}: {x.shape[1]} frames, but the model needs {n_frames}; use a shorter "
+            "length (seconds) or longer trajectories (the paper zero-pads short ones)"
+        )
+    out = np.ascontiguousarray(x[:, :n_frames, DIMS[dims]], dtype=np.float32)
+    bad = ~np.isfinite(out).all(axis=(1, 2))
+    if bad.any():
+        raise TrajectoryError(
+            f"{what}: {int(bad.sum())} trajectories hold NaN or infinite values "
+            f"(first: index {int(np.argmax(bad))}); fix or drop them"
+        )
+    return out
+
+
+@dataclass
+class TrainedModel:
+    """A trained classifier with everything needed to use it and to know where it came from."""
+
+    net: Classifier
+    config: TrainConfig
+    fps: float
+    """Frames per second of the data it was trained on."""
+    data_key: str = ""
+    """Key of the dataset it was trained on ('' if unknown)."""
+    history: list[dict[str, float]] = field(default_factory=list)
+    """One entry per epoch: epoch, train_loss, val_loss, val_accuracy."""
+    best_epoch: int = 0
+    """The epoch whose weights were kept (lowest validation loss)."""
+
+    @property
+    def dims(self) -> str:
+        """'z' or 'xyz'."""
+        return self.config.dims
+
+    @property
+    def n_frames(self) -> int:
+        """Input length T in frames."""
+        return self.config.n_frames(self.fps)
+
+    @property
+    def val_accuracy(self) -> float:
+        """Validation accuracy at the kept epoch."""
+        return float(self.history[self.best_epoch]["val_accuracy"]) if self.history else math.nan
+
+    @torch.no_grad()
+    def predict_proba(self, x: np.ndarray, batch: int = 1024) -> np.ndarray:
+        """``x`` (n, T, 3) float32 metres, world (x, y, z), T >= ``n_frames`` -> (n, 2) float64 [p_light, p_heavy].
+
+        Only the first ``n_frames`` frames and the model's own dims are used; normalisation is inside.
+        """
+        xs = torch.from_numpy(select_inputs(x, self.dims, self.n_frames))
+        self.net.eval()
+        out = [F.softmax(self.net(xs[i : i + batch]), dim=-1) for i in range(0, len(xs), batch)]
+        return torch.cat(out).double().numpy() if out else np.zeros((0, 2))
+
+    def save(self, out_dir: str | Path) -> Path:
+        """Write the model directory atomically (a temporary directory renamed into place)."""
+        out = Path(out_dir)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+        try:
+            torch.save(self.net.state_dict(), tmp / "weights.pt")
+            texts = {
+                "config.json": dataclasses.asdict(self.config),
+                "normalisation.json": {"dims": self.dims, "std": self.net.scale.tolist()},
+                "history.json": {"best_epoch": self.best_epoch, "epochs": self.history},
+                "meta.json": {"format": FORMAT, "fps": self.fps, "data_key": self.data_key,
+                              "n_frames": self.n_frames, "classes": list(CLASSES), "torch": torch.__version__},
+            }
+            for name, obj in texts.items():
+                (tmp / name).write_text(json.dumps(obj, indent=1) + "\n")
+            if out.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old.", dir=out.parent))
+                os.replace(out, old / "m")
+                os.replace(tmp, out)
+                shutil.rmtree(old)
+            else:
+                os.replace(tmp, out)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        return out
+
+
+def _read_json(path: Path) -> Any:
+    try:
+        return json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ModelError(f"model file {path} cannot be read ({type(e).__name__}); retrain with `study train`") from None
+
+
+def load(model_dir: str | Path) -> TrainedModel:
+    """Read a directory written by :meth:`TrainedModel.save`, checking that every file is there and agrees."""
+    d = Path(model_dir)
+    hint = "retrain it with `study train ... --out DIR`"
+    if not d.is_dir():
+        raise ModelError(f"model directory {d}: no such directory; {hint}")
+    for name in FILES:
+        if not (d / name).is_file():
+            raise ModelError(f"model directory {d} is missing {name}; {hint}")
+    meta = _read_json(d / "meta.json")
+    if meta.get("format") != FORMAT:
+        raise ModelError(f"model directory {d}: format {meta.get('format')!r}, expected {FORMAT!r}; {hint}")
+    try:
+        cfg = TrainConfig(**_read_json(d / "config.json"))
+        cfg.check()
+    except (TypeError, ConfigError) as e:
+        raise ModelError(f"model file {d / 'config.json'} is not a valid TrainConfig ({e}); {hint}") from None
+    try:
+        state = torch.load(d / "weights.pt", weights_only=True)
+    except Exception as e:  # torch raises several types for a corrupt file
+        raise ModelError(f"model file {d / 'weights.pt'} cannot be loaded ({type(e).__name__}); {hint}") from None
+    net = Classifier(len(DIMS[cfg.dims]), cfg.hidden, cfg.layers, cfg.dropout, cfg.cell)
+    try:
+        net.load_state_dict(state)
+    except (RuntimeError, TypeError) as e:
+        raise ModelError(f"model file {d / 'weights.pt'} does not match config.json ({str(e)[:200]}); {hint}") from None
+    norm = _read_json(d / "normalisation.json")
+    if norm.get("dims") != cfg.dims or not np.allclose(norm.get("std", []), net.scale.numpy(), rtol=1e-6):
+        raise ModelError(f"model file {d / 'normalisation.json'} disagrees with the weights; {hint}")
+    hist = _read_json(d / "history.json")
+    net.eval()
+    return TrainedModel(net=net, config=cfg, fps=float(meta["fps"]), data_key=str(meta.get("data_key", "")),
+                        history=list(hist.get("epochs", [])), best_epoch=int(hist.get("best_epoch", 0)))
+
+
+@contextlib.contextmanager
+def deterministic(seed: int) -> Iterator[None]:
+    """Seed torch inside a forked RNG, with deterministic algorithms and ``THREADS`` threads; restore after."""
+    threads, det = torch.get_num_threads(), torch.are_deterministic_algorithms_enabled()
+    with torch.random.fork_rng(devices=[]):
+        torch.manual_seed(seed)
+        torch.set_num_threads(THREADS)
+        torch.use_deterministic_algorithms(True)
+        try:
+            yield
+        finally:
+            torch.use_deterministic_algorithms(det)
+            torch.set_num_threads(threads)
+
+
+def last_logits(net: Classifier, x: torch.Tensor, truncation: int) -> torch.Tensor:
+    """Logits (B, 2) at the last frame of ``x`` (B, T, D), gradients truncated to the last ``truncation`` frames."""
+    T = x.shape[1]
+    state = None
+    if truncation < T:
+        with torch.no_grad():
+            _, state = net.encode(x[:, : T - truncation])  # carries the state; no graph is kept
+    hs, _ = net.encode(x[:, max(0, T - truncation) :], state)  # (B, k, H)
+    return net.logits(hs[:, -1])
+
+
+def split_train_val(n: int, val_fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Indices (train, val) of a seeded permutation of ``range(n)``; at least one in each."""
+    perm = np.random.default_rng(seed).permutation(n)
+    n_val = min(max(1, round(val_fraction * n)), n - 1)
+    return np.sort(perm[n_val:]), np.sort(perm[:n_val])
+
+
+@torch.no_grad()
+def _loss_and_accuracy(net: Classifier, x: torch.Tensor, y: torch.Tensor, batch: int = 1024) -> tuple[float, float]:
+    net.eval()
+    logits = torch.cat([net(x[i : i + batch]) for i in range(0, len(x), batch)])
+    return F.cross_entropy(logits, y).item(), (logits.argmax(1) == y).double().mean().item()
+
+
+def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedModel:
+    """Train the classifier on ``dataset.train`` with ``cfg``; early-stop on a held-out part of it."""
+    cfg.check()
+    T = cfg.n_frames(dataset.fps)
+    x = select_inputs(dataset.train.x, cfg.dims, T, what="training split")  # (n, T, D)
+    y = np.asarray(dataset.train.y, dtype=np.int64)
+    if len(y) < 2:
+        raise TrajectoryError(f"training split has {len(y)} trajectories; need at least 2")
+    tr, va = split_train_val(len(y), cfg.val_fraction, cfg.seed)
+    x_tr, y_tr = torch.from_numpy(x[tr]), torch.from_numpy(y[tr])
+    x_va, y_va = torch.from_numpy(x[va]), torch.from_numpy(y[va])
+    std = x[tr].reshape(-1, x.shape[2]).astype(np.float64).std(axis=0)  # (D,) training part only
+    std = np.where(std > 0, std, 1.0)
+
+    with deterministic(cfg.seed):
+        net = Classifier(x.shape[2], cfg.hidden, cfg.layers, cfg.dropout, cfg.cell)
+        net.set_scale(torch.from_numpy(std).float())
+        opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+        history: list[dict[str, float]] = []
+        best_loss, best_epoch, best_state = math.inf, 0, copy.deepcopy(net.state_dict())
+        bar = tqdm(range(cfg.max_epochs), desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
+        for epoch in bar:
+            net.train()
+            order = torch.randperm(len(y_tr))
+            total = 0.0
+            for i in range(0, len(order), cfg.batch_size):
+                idx = order[i : i + cfg.batch_size]
+                loss = F.cross_entropy(last_logits(net, x_tr[idx], cfg.truncation), y_tr[idx])
+                opt.zero_grad(set_to_none=True)
+                loss.backward()
+                opt.step()
+                total += loss.item() * len(idx)
+            val_loss, val_acc = _loss_and_accuracy(net, x_va, y_va)
+            history.append({"epoch": epoch, "train_loss": total / len(y_tr), "val_loss": val_loss, "val_accuracy": val_acc})
+            bar.set_postfix(val_loss=f"{val_loss:.3f}", val_acc=f"{val_acc:.3f}")
+            if val_loss < best_loss:
+                best_loss, best_epoch, best_state = val_loss, epoch, copy.deepcopy(net.state_dict())
+            elif epoch - best_epoch >= cfg.patience:
+                break
+        net.load_state_dict(best_state)
+        net.eval()
+    return TrainedModel(net=net, config=cfg, fps=dataset.fps, data_key=dataset.key, history=history, best_epoch=best_epoch)
+
+
+def metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, Any]:
+    """Accuracy, per-class accuracy and the confusion matrix (rows true class, columns predicted)."""
+    y_true, y_pred = np.asarray(y_true), np.asarray(y_pred)
+    cm = np.zeros((len(CLASSES), len(CLASSES)), dtype=np.int64)
+    np.add.at(cm, (y_true, y_pred), 1)
+    per_class = {c: (float(cm[k, k] / cm[k].sum()) if cm[k].sum() else math.nan) for k, c in enumerate(CLASSES)}
+    return {
+        "n": int(len(y_true)),
+        "accuracy": float((y_true == y_pred).mean()) if len(y_true) else math.nan,
+        "per_class_accuracy": per_class,
+        "confusion": cm.tolist(),
+        "classes": list(CLASSES),
+    }
+
+
+def evaluate(tm: TrainedModel, split: Split) -> dict[str, Any]:
+    """Score ``tm`` on ``split`` (normally the test split): see :func:`metrics`."""
+    pred = tm.predict_proba(split.x).argmax(axis=1)
+    return metrics(split.y, pred)

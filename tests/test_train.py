@@ -1,0 +1,179 @@
+"""Training: determinism, truncated BPTT, save/load, evaluation, every bad input, the CLI."""
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+import torch
+
+import model_toys
+from study import cli, data, train
+from study.errors import ConfigError, ModelError, TrajectoryError
+
+TINY = train.TrainConfig(dims="xyz", length=0.5, hidden=8, max_epochs=2, batch_size=8, truncation=5, patience=2)
+
+
+@pytest.fixture(scope="module")
+def ds() -> data.Dataset:
+    return model_toys.dataset(n=24, T=20)
+
+
+@pytest.fixture(scope="module")
+def tm(ds) -> train.TrainedModel:
+    return train.fit(ds, TINY, progress=False)
+
+
+def _weights(m: train.TrainedModel) -> bytes:
+    return b"".join(v.numpy().tobytes() for v in m.net.state_dict().values())
+
+
+def test_same_seed_same_weights_bitwise(ds, tm):
+    rng = torch.get_rng_state()
+    again = train.fit(ds, TINY, progress=False)
+    assert _weights(again) == _weights(tm)
+    assert again.history == tm.history
+    assert torch.equal(torch.get_rng_state(), rng), "fit leaves the caller's RNG alone"
+    other = train.fit(ds, dataclasses.replace(TINY, seed=1), progress=False)
+    assert _weights(other) != _weights(tm)
+
+
+def test_history_and_contract(ds, tm):
+    assert tm.dims == "xyz" and tm.fps == 30.0 and tm.n_frames == 15 and tm.data_key == "toy"
+    assert 1 <= len(tm.history) <= TINY.max_epochs
+    assert set(tm.history[0]) == {"epoch", "train_loss", "val_loss", "val_accuracy"}
+    p = tm.predict_proba(ds.test.x)
+    assert p.shape == (24, 2) and p.dtype == np.float64
+    np.testing.assert_allclose(p.sum(axis=1), 1.0, atol=1e-6)
+
+
+def test_normalisation_uses_the_training_part_only(ds, tm):
+    tr, _ = train.split_train_val(len(ds.train.y), TINY.val_fraction, TINY.seed)
+    expect = ds.train.x[tr, :15].reshape(-1, 3).astype(np.float64).std(axis=0)
+    np.testing.assert_allclose(tm.net.scale.numpy(), expect, rtol=1e-6)
+
+
+def test_validation_split_is_seeded_and_disjoint():
+    a_tr, a_va = train.split_train_val(50, 0.2, seed=3)
+    b_tr, b_va = train.split_train_val(50, 0.2, seed=3)
+    assert np.array_equal(a_va, b_va) and len(a_va) == 10
+    assert not set(a_tr) & set(a_va) and len(a_tr) + len(a_va) == 50
+    assert not np.array_equal(train.split_train_val(50, 0.2, seed=4)[1], a_va)
+
+
+@pytest.mark.parametrize("k", [3, 8, 100])
+def test_truncated_bptt_reaches_only_the_last_k_frames(k):
+    torch.manual_seed(0)
+    net = train.Classifier(3, hidden=6).double().eval()
+    x = torch.randn(2, 8, 3, dtype=torch.float64, requires_grad=True)
+    train.last_logits(net, x, truncation=k).sum().backward()
+    reached = x.grad.abs().sum(dim=(0, 2)) > 0  # (T,)
+    first = max(0, 8 - k)
+    assert not reached[:first].any() and reached[first:].all()
+    with torch.no_grad():  # truncation changes gradients, never the prediction
+        torch.testing.assert_close(train.last_logits(net, x, k), net(x), atol=1e-12, rtol=0)
+
+
+def test_save_load_round_trip(tmp_path, ds, tm):
+    out = tm.save(tmp_path / "m")
+    assert sorted(p.name for p in out.iterdir()) == sorted(train.FILES)
+    back = train.load(out)
+    assert back.config == tm.config and back.fps == tm.fps and back.data_key == "toy"
+    assert back.history == tm.history and back.best_epoch == tm.best_epoch
+    assert back.predict_proba(ds.test.x).tobytes() == tm.predict_proba(ds.test.x).tobytes()
+    tm.save(out)  # overwriting an existing directory works and leaves no temporary behind
+    assert [p.name for p in tmp_path.iterdir()] == ["m"]
+    assert torch.load(out / "weights.pt", weights_only=True).keys() == tm.net.state_dict().keys()
+
+
+@pytest.mark.parametrize("name", train.FILES)
+def test_model_dir_missing_a_file(tmp_path, tm, name):
+    out = tm.save(tmp_path / "m")
+    (out / name).unlink()
+    with pytest.raises(ModelError, match=name):
+        train.load(out)
+
+
+def test_model_dir_bad_contents(tmp_path, tm):
+    with pytest.raises(ModelError, match="no such directory"):
+        train.load(tmp_path / "none")
+    out = tm.save(tmp_path / "m")
+    (out / "weights.pt").write_bytes(b"garbage")
+    with pytest.raises(ModelError, match="weights.pt"):
+        train.load(out)
+    out = tm.save(tmp_path / "m")
+    cfg = json.loads((out / "config.json").read_text())
+    (out / "config.json").write_text(json.dumps(dict(cfg, hidden=16)))
+    with pytest.raises(ModelError, match="does not match"):
+        train.load(out)
+    (out / "config.json").write_text(json.dumps(dict(cfg, colour="red")))
+    with pytest.raises(ModelError, match="config.json"):
+        train.load(out)
+
+
+def test_bad_config(ds):
+    for bad, match in [(dict(dims="xy"), "dims"), (dict(length=0.0), "length"), (dict(length=-1.0), "length"),
+                       (dict(cell="rnn"), "cell"), (dict(truncation=0), "truncation"), (dict(dropout=1.0), "dropout")]:
+        with pytest.raises(ConfigError, match=match):
+            train.fit(ds, dataclasses.replace(TINY, **bad), progress=False)
+
+
+def test_bad_data(ds, tm):
+    with pytest.raises(TrajectoryError, match="20 frames, but the model needs 30"):
+        train.fit(ds, dataclasses.replace(TINY, length=1.0), progress=False)
+    x = ds.train.x.copy()
+    x[5, 3, 2] = np.nan
+    nan_ds = data.Dataset(train=data.Split(x, ds.train.y), test=ds.test, fps=30.0)
+    with pytest.raises(TrajectoryError, match="index 5"):
+        train.fit(nan_ds, TINY, progress=False)
+    with pytest.raises(TrajectoryError, match="needs 15"):
+        tm.predict_proba(ds.test.x[:, :10])
+    with pytest.raises(TrajectoryError, match="shape"):
+        tm.predict_proba(ds.test.x[:, :, :2])
+
+
+def test_metrics_confusion_rows_true_cols_predicted():
+    m = train.metrics(np.array([0, 0, 0, 1, 1]), np.array([0, 1, 1, 1, 1]))
+    assert m["confusion"] == [[1, 2], [0, 2]]
+    assert m["accuracy"] == pytest.approx(0.6)
+    assert m["per_class_accuracy"] == {"light": pytest.approx(1 / 3), "heavy": 1.0}
+    assert math.isnan(train.metrics(np.array([1]), np.array([1]))["per_class_accuracy"]["light"])
+
+
+@pytest.mark.slow
+def test_learns_the_toy_problem():
+    ds = model_toys.dataset(n=64, T=45)
+    cfg = train.TrainConfig(dims="z", length=1.5, hidden=16, max_epochs=15, batch_size=16, lr=1e-2, patience=15)
+    tm = train.fit(ds, cfg, progress=False)
+    assert train.evaluate(tm, ds.test)["accuracy"] >= 0.8
+
+
+def test_cli_defaults_match_train_config():
+    d = train.TrainConfig()
+    for name, value in vars(cli._TRAIN_DEFAULTS).items():
+        assert getattr(d, name) == value, name
+
+
+def test_cli_train_and_evaluate(tmp_path, ds, capsys):
+    path = data.save(ds, tmp_path / "d.npz")
+    args = ["train", "--data", str(path), "--dims", "z", "--length", "0.5", "--epochs", "1", "--batch-size", "8",
+            "--out", str(tmp_path / "m"), "--no-progress"]
+    assert cli.main(args) == 0
+    capsys.readouterr()
+    assert cli.main(["evaluate", "--model", str(tmp_path / "m"), "--data", str(path)]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert set(res["per_class_accuracy"]) == {"light", "heavy"} and np.sum(res["confusion"]) == 24
+    assert res["trained_on"] == res["data_key"] == "toy"
+    assert train.load(tmp_path / "m").dims == "z"
+
+
+def test_cli_bad_input_one_line_exit_2(tmp_path, ds, capsys):
+    path = data.save(ds, tmp_path / "d.npz")
+    assert cli.main(["train", "--data", str(path), "--dims", "z", "--length", "5", "--out", str(tmp_path / "m")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "needs 150" in err
+    assert cli.main(["evaluate", "--model", str(tmp_path / "none"), "--data", str(path)]) == 2
+    assert "no such directory" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        cli.main(["train", "--data", str(path), "--dims", "xy", "--length", "1", "--out", str(tmp_path / "m")])
