@@ -164,7 +164,8 @@ class TrainedModel:
         """
         xs = torch.from_numpy(select_inputs(x, self.dims, self.n_frames))
         self.net.eval()
-        out = [F.softmax(self.net(xs[i : i + batch]), dim=-1) for i in range(0, len(xs), batch)]
+        with num_threads(THREADS):  # same numbers whatever the machine; no thread-pool churn after fit
+            out = [F.softmax(self.net(xs[i : i + batch]), dim=-1) for i in range(0, len(xs), batch)]
         return torch.cat(out).double().numpy() if out else np.zeros((0, 2))
 
     def save(self, out_dir: str | Path) -> Path:
@@ -238,18 +239,30 @@ def load(model_dir: str | Path) -> TrainedModel:
 
 
 @contextlib.contextmanager
+def num_threads(n: int) -> Iterator[None]:
+    """Run torch's CPU ops on ``n`` threads; restore the previous count after."""
+    before = torch.get_num_threads()
+    if before == n:
+        yield
+        return
+    torch.set_num_threads(n)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
+
+
+@contextlib.contextmanager
 def deterministic(seed: int) -> Iterator[None]:
     """Seed torch inside a forked RNG, with deterministic algorithms and ``THREADS`` threads; restore after."""
-    threads, det = torch.get_num_threads(), torch.are_deterministic_algorithms_enabled()
-    with torch.random.fork_rng(devices=[]):
+    det = torch.are_deterministic_algorithms_enabled()
+    with torch.random.fork_rng(devices=[]), num_threads(THREADS):
         torch.manual_seed(seed)
-        torch.set_num_threads(THREADS)
         torch.use_deterministic_algorithms(True)
         try:
             yield
         finally:
             torch.use_deterministic_algorithms(det)
-            torch.set_num_threads(threads)
 
 
 def last_logits(net: Classifier, x: torch.Tensor, truncation: int) -> torch.Tensor:

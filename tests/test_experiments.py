@@ -1,0 +1,85 @@
+"""The cached experiment runs behind Table 1 and the length figure."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+import model_toys
+from study import experiments, train
+from study.errors import ConfigError
+
+TINY = experiments.Preset(
+    name="tiny", length=0.5, lrs=(1e-2,), truncations=(5, 15), dropouts=(0.2,), batch_sizes=(8,),
+    seeds=(0, 1), lengths=(0.3, 0.5), length_seeds=(0,), max_epochs=1, patience=1,
+)
+
+
+@pytest.fixture(scope="module")
+def ds():
+    return model_toys.dataset(n=16, T=20)
+
+
+
+
+def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
+    grid = experiments.grid(ds, TINY, tmp_path, progress=False)
+    assert [(r["truncation"]) for r in grid] == [5, 15] and all("accuracy" not in r for r in grid), \
+        "the grid never scores the test split"
+    cfg = experiments.best_config(grid, TINY)
+    assert cfg.dims == "z" and cfg.truncation in (5, 15) and cfg.max_epochs == 1
+    seeds = experiments.seed_runs(ds, cfg, TINY, tmp_path, progress=False)
+    assert [(r["dims"], r["seed"]) for r in seeds] == [("z", 0), ("z", 1), ("xyz", 0), ("xyz", 1)]
+    assert all(0 <= r["accuracy"] <= 1 for r in seeds)
+    lengths = experiments.length_sweep(ds, cfg, TINY, tmp_path, progress=False)
+    assert [(r["dims"], r["length"], r["frames"]) for r in lengths] == [
+        ("z", 0.3, 9), ("z", 0.5, 15), ("xyz", 0.3, 9), ("xyz", 0.5, 15)]
+    n_files = len(list((tmp_path / "runs").glob("*.json")))
+    assert n_files == 2 + 4 + 2  # the length sweep's 0.5 s runs are the seed runs' (cache hits)
+
+    def no_training(*a, **k):
+        raise AssertionError("a cached run was retrained")
+
+    monkeypatch.setattr(train, "fit", no_training)
+    assert experiments.seed_runs(ds, cfg, TINY, tmp_path, progress=False) == seeds
+    assert experiments.grid(ds, TINY, tmp_path, progress=False) == grid
+    assert not list((tmp_path / "runs").glob(".*tmp"))
+
+
+def test_run_record_and_key(tmp_path, ds):
+    cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
+    rec = experiments.run(ds, cfg, tmp_path)
+    saved = json.loads((tmp_path / "runs" / f"{rec['key']}.json").read_text())
+    assert saved == rec and rec["test"]["n"] == 16 and len(rec["history"]) == rec["epochs_run"]
+    keys = {experiments.run_key(ds, cfg, True), experiments.run_key(ds, cfg, False),
+            experiments.run_key(ds, dataclasses.replace(cfg, seed=1), True),
+            experiments.run_key(model_toys.dataset(n=16, T=20, key="other"), cfg, True)}
+    assert len(keys) == 4
+    (tmp_path / "runs" / f"{rec['key']}.json").write_text("{broken")
+    again = experiments.run(ds, cfg, tmp_path)
+    assert again["test"] == rec["test"], "a damaged cache entry is retrained, with the same result"
+
+
+def test_ablation_and_baseline(tmp_path, ds):
+    cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
+    rows = experiments.ablation(ds, cfg, dataclasses.replace(TINY, seeds=(0,)), tmp_path, progress=False)
+    assert [r["cell"] for r in rows] == ["peephole", "lstm", "gru"]
+    base = experiments.baseline_runs(ds, TINY)
+    assert [r["dims"] for r in base] == ["z", "xyz"] and all(0 <= r["accuracy"] <= 1 for r in base)
+
+
+def test_summarise():
+    rows = [{"dims": "z", "accuracy": a} for a in (0.7, 0.8, 0.9)] + [{"dims": "xyz", "accuracy": 0.5}]
+    s = {r["dims"]: r for r in experiments.summarise(rows, ("dims",))}
+    assert s["z"]["n"] == 3 and s["z"]["mean"] == pytest.approx(0.8) and s["z"]["best"] == 0.9
+    assert s["z"]["std"] == pytest.approx(np.std([0.7, 0.8, 0.9], ddof=1)) and s["xyz"]["std"] == 0.0
+
+
+def test_presets():
+    paper = experiments.preset("paper")
+    assert paper.n_grid >= 16 and len(paper.seeds) >= 5 and len(paper.lengths) >= 8
+    assert min(len(v) for v in (paper.lrs, paper.truncations, paper.dropouts, paper.batch_sizes)) >= 2
+    assert experiments.preset("smoke").max_epochs < paper.max_epochs
+    with pytest.raises(ConfigError, match="preset"):
+        experiments.preset("huge")
