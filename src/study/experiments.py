@@ -228,3 +228,18 @@ def summarise(rows: list[dict], by: tuple[str, ...], value: str = "accuracy") ->
 def n_models(p: Preset) -> int:
     """How many models a full run of the preset trains (before cache sharing between experiments)."""
     return p.n_grid + 2 * len(p.seeds) + 2 * len(p.lengths) * len(p.length_seeds) + (len(p.cells) - 1) * len(p.seeds)
+
+
+def long_input_effect(summary: list[dict], dims: str) -> dict[str, Any]:
+    """Does accuracy fall at the longest inputs? From :func:`summarise` rows grouped by (dims, length).
+
+    Compares the best mean accuracy over lengths with the mean at the longest length; ``hurts`` when
+    the drop exceeds twice the larger of the two standard deviations and one percentage point.
+    """
+    rows = sorted((r for r in summary if r["dims"] == dims), key=lambda r: r["length"])
+    best = max(rows, key=lambda r: r["mean"])
+    last = rows[-1]
+    drop = best["mean"] - last["mean"]
+    return {"dims": dims, "best_length": best["length"], "best_mean": best["mean"], "last_length": last["length"],
+            "last_mean": last["mean"], "drop": drop,
+            "hurts": bool(drop > max(0.01, 2 * max(best["std"], last["std"]))) and best is not last}

@@ -1,0 +1,98 @@
+"""Training speed of the paper's peephole LSTM against nn.LSTM of the same size, in one run.
+
+Both are the full classifier of ``study.model`` (2 layers x 64 units, dropout, linear head) on
+random inputs of shape (B, T, 3); one training step is forward + backward (full BPTT) + Adam. Prints,
+for T = 90 and 300 frames: ms per step, sequences per second, the time of one epoch of the paper's
+training set (1600 sequences), and the peephole/nn.LSTM throughput ratio (1.0 = as fast as the
+vendor kernel; issue 5's target is >= 0.7 on CPU, >= 0.5 on GPU). Also the streaming cost: one
+frame's update of a single trajectory's state. On CUDA too when a GPU is present (batch 128 and 1024).
+
+    python benchmarks/bench_train.py [--quick] [--threads N] [--device cpu|cuda|all]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import torch
+import torch.nn.functional as F
+
+from study.model import Classifier
+
+EPOCH_SEQUENCES = 1600
+"""Training sequences per epoch at paper scale (2000 train trajectories minus a 20 % validation part)."""
+
+
+def _sync(device: str) -> None:
+    if device == "cuda":
+        torch.cuda.synchronize()
+
+
+def time_steps(cell: str, B: int, T: int, steps: int, device: str) -> float:
+    """Seconds per training step (median of ``steps`` after one warm-up step)."""
+    torch.manual_seed(0)
+    net = Classifier(3, hidden=64, layers=2, dropout=0.2, cell=cell).to(device).train()
+    opt = torch.optim.Adam(net.parameters(), lr=1e-3)
+    x = torch.randn(B, T, 3, device=device)
+    y = torch.randint(0, 2, (B,), device=device)
+    times = []
+    for i in range(steps + 1):
+        _sync(device)
+        t0 = time.perf_counter()
+        loss = F.cross_entropy(net(x), y)
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        opt.step()
+        _sync(device)
+        if i:
+            times.append(time.perf_counter() - t0)
+    return sorted(times)[len(times) // 2]
+
+
+@torch.no_grad()
+def time_stream(cell: str, frames: int) -> float:
+    """Seconds per streamed frame of one trajectory (CPU, eval mode)."""
+    torch.manual_seed(0)
+    net = Classifier(3, cell=cell).eval()
+    state = net.init_state(1)
+    xs = torch.randn(frames, 1, 3)
+    for x_t in xs[:10]:
+        net.step(x_t, state)
+    t0 = time.perf_counter()
+    for x_t in xs:
+        _, state = net.step(x_t, state)
+    return (time.perf_counter() - t0) / frames
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="fewer timed steps (2 instead of 5), T = 90 only on CPU")
+    ap.add_argument("--threads", type=int, default=1, help="CPU threads, the same for both models (default: 1, as training uses)")
+    ap.add_argument("--device", choices=["cpu", "cuda", "all"], default="all",
+                    help="where to measure; 'all' = CPU, and CUDA when available (default: all)")
+    a = ap.parse_args()
+    torch.set_num_threads(a.threads)
+    devices = ["cpu"] if a.device == "cpu" else ["cuda"] if a.device == "cuda" else ["cpu", "cuda"]
+    devices = [d for d in devices if d == "cpu" or torch.cuda.is_available()]
+    steps = 2 if a.quick else 5
+    print(f"torch {torch.__version__}, {a.threads} CPU thread(s); 2 x 64 classifier, full BPTT, Adam")
+    print(f"{'device':6} {'B':>5} {'T':>4} {'cell':9} {'ms/step':>9} {'seq/s':>9} {'epoch s':>8} {'ratio':>6}")
+    for device in devices:
+        shapes = [(128, 90)] if (a.quick and device == "cpu") else [(128, 90), (128, 300)]
+        if device == "cuda":
+            shapes += [(1024, 90), (1024, 300)]
+        for B, T in shapes:
+            res = {c: time_steps(c, B, T, steps if device == "cpu" else 10, device) for c in ("lstm", "peephole")}
+            for cell, s in res.items():
+                ratio = res["lstm"] / s
+                print(f"{device:6} {B:5d} {T:4d} {cell:9} {s * 1e3:9.1f} {B / s:9.0f} "
+                      f"{EPOCH_SEQUENCES / B * s:8.2f} {ratio:6.2f}")
+    frames = 300 if a.quick else 2000
+    stream = {c: time_stream(c, frames) for c in ("lstm", "peephole")}
+    print(f"streaming, one trajectory, CPU: nn.LSTM {stream['lstm'] * 1e6:.0f} us/frame, "
+          f"peephole {stream['peephole'] * 1e6:.0f} us/frame (target < 50 us)")
+
+
+if __name__ == "__main__":
+    main()
