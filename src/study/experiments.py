@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from tqdm.auto import tqdm
+from tqdm import tqdm
 
 from study import baseline, cache, train
 from study.data import Dataset
