@@ -83,3 +83,21 @@ def test_presets():
     assert experiments.preset("smoke").max_epochs < paper.max_epochs
     with pytest.raises(ConfigError, match="preset"):
         experiments.preset("huge")
+
+
+def test_long_input_effect():
+    s = [{"dims": "z", "length": L, "mean": m, "std": 0.01} for L, m in [(1, 0.7), (2, 0.8), (4, 0.7)]]
+    e = experiments.long_input_effect(s, "z")
+    assert e["best_length"] == 2 and e["last_length"] == 4 and e["hurts"]
+    flat = [dict(r, mean=0.8) for r in s]
+    assert not experiments.long_input_effect(flat, "z")["hurts"]
+    rising = [dict(r, mean=0.6 + 0.05 * r["length"]) for r in s]
+    assert not experiments.long_input_effect(rising, "z")["hurts"]
+
+
+def test_markdown_table():
+    from study import tables
+
+    md = tables.markdown([{"a": 0.8123, "b": "x"}], {"a": "acc", "b": "name"}, {"a": tables.pct})
+    assert md.splitlines() == ["| acc | name |", "|---|---|", "| 81.2 % | x |"]
+    assert tables.pct_pm(0.8, 0.0123) == "80.0 ± 1.2 %"
