@@ -68,13 +68,13 @@ class TrainConfig:
     """Probability of dropping a unit of the last hidden state (paper's 'rate 0.8' read as keep-probability)."""
     lr: float = 3e-3
     """Adam learning rate."""
-    batch_size: int = 64
+    batch_size: int = 32
     """Trajectories per gradient step."""
-    truncation: int = 90
+    truncation: int = 30
     """Truncated-BPTT length in frames: the loss back-propagates through at most this many last frames."""
-    max_epochs: int = 60
+    max_epochs: int = 40
     """Upper bound on passes over the training split."""
-    patience: int = 10
+    patience: int = 8
     """Stop after this many epochs without a lower validation loss; the best epoch's weights are kept."""
     val_fraction: float = 0.2
     """Share of the training split held out for early stopping (and for the grid search)."""
