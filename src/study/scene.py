@@ -94,6 +94,7 @@ def scene_xml(
     if not contact:
         flags.append('contact="disable"')
     flag = f"<flag {' '.join(flags)}/>" if flags else ""
+    condim = 3 if friction > 0 else 1  # a zero-width friction pyramid is degenerate: drop friction instead
     r, g, b, a = rgba
     # priority="1" makes the object's solref, solimp and friction the contact's own: no mixing with the floor's.
     return f"""<mujoco model="throw">
@@ -113,7 +114,7 @@ def scene_xml(
       <freejoint name="object"/>
       <geom name="object" type="{shape.kind}" size="{size}" mass="{mass!r}" priority="1"
             solref="{-stiffness!r} {-damping!r}" solimp="0.95 0.99 0.001 0.5 2"
-            friction="{friction!r} 0.005 0.0001" condim="3" fluidshape="ellipsoid" rgba="{r} {g} {b} {a}"/>
+            friction="{friction!r} 0.005 0.0001" condim="{condim}" fluidshape="ellipsoid" rgba="{r} {g} {b} {a}"/>
     </body>
   </worldbody>
 </mujoco>"""
