@@ -1,6 +1,6 @@
 """The book pipeline on a tiny two-chapter book: execution, parameter injection, caching, failures, CLI.
 
-One tiny book is built (with HTML) once per module and then edited by the tests in file order, so
+One tiny book is executed once per module and then edited by the tests in file order, so
 each test pays only for the chapters it makes re-execute (a kernel start, about two seconds).
 """
 
@@ -44,7 +44,10 @@ TOC = """format: jb-book
 root: book/alpha
 chapters:
   - file: book/beta
+  - file: book/notes
 """
+
+NOTES = "# Notes\n\nA plain page: no kernel, copied as it is.\n"
 
 # alpha reads the file its parameter names and glues the preset it was given.
 ALPHA = HEADER + """
@@ -124,15 +127,16 @@ def ran(timings: dict) -> set[str]:
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A two-chapter book, executed with preset 'smoke' and rendered to HTML once."""
-    root = write_book(tmp_path_factory.mktemp("tiny"), {"alpha": ALPHA, "beta": BETA}, TOC)
+    """A two-chapter book (and a plain page), executed once with preset 'smoke'."""
+    root = write_book(tmp_path_factory.mktemp("tiny"), {"alpha": ALPHA, "beta": BETA, "notes": NOTES}, TOC)
     (root / "inputs.txt").write_text("first\n")
-    book.build(root, "smoke", force=False, only=None, html=True)
+    book.build(root, "smoke", force=False, only=None, html=False)
     return root
 
 
 @pytest.mark.slow
 def test_build_executes_injects_and_renders(tiny: Path) -> None:
+    book.render(tiny)
     nb = nbformat.read(executed(tiny, "alpha"), as_version=4)
     injected = [c for c in nb.cells if "injected-parameters" in c.metadata.get("tags", [])]
     assert len(injected) == 1 and "preset = \"smoke\"" in injected[0].source
@@ -144,8 +148,10 @@ def test_build_executes_injects_and_renders(tiny: Path) -> None:
     assert (tiny / "_build" / "html" / "index.html").is_file()
     timings = json.loads((tiny / "_build" / "executed" / "timings.json").read_text())
     assert timings["preset"] == "smoke"
-    assert set(timings["chapters"]) == {"alpha", "beta"}
-    assert all(not t["cached"] and t["seconds"] > 0 for t in timings["chapters"].values())
+    assert set(timings["chapters"]) == {"alpha", "beta", "notes"}
+    assert timings["chapters"]["notes"]["page"]
+    assert all(not t["cached"] and t["seconds"] > 0 for s, t in timings["chapters"].items() if s != "notes")
+    assert "A plain page" in (tiny / "_build" / "html" / "book" / "notes.html").read_text()
 
 
 def test_second_run_executes_nothing(tiny: Path) -> None:
@@ -180,7 +186,7 @@ def test_only_reexecutes_named_chapter_and_any_missing_one(tiny: Path) -> None:
 
 
 def test_only_unknown_chapter_is_a_config_error(tiny: Path) -> None:
-    with pytest.raises(ConfigError, match=r"gamma.*alpha, beta"):
+    with pytest.raises(ConfigError, match=r"gamma.*alpha, beta, notes"):
         book.execute(tiny, "smoke", only=["gamma"])
 
 
@@ -190,7 +196,7 @@ def test_unknown_preset_is_a_config_error(tiny: Path) -> None:
 
 
 def test_toc_naming_a_missing_chapter_is_a_config_error(tmp_path: Path) -> None:
-    write_book(tmp_path, {"alpha": ALPHA}, TOC)
+    write_book(tmp_path, {"alpha": ALPHA, "notes": NOTES}, TOC)
     with pytest.raises(ConfigError, match=r"book/beta"):
         book.chapters(tmp_path)
 
@@ -229,6 +235,8 @@ def test_failing_cell_names_chapter_and_cell_and_keeps_no_complete_copy(bad_book
     assert not stale.exists()
     assert (bad_book / "_build" / "failed" / "book" / "bad.ipynb").is_file()
     assert not list((bad_book / "_build" / "executed" / "book").glob("*.ipynb"))
+    timings = json.loads((bad_book / "_build" / "executed" / "timings.json").read_text())
+    assert timings["chapters"]["bad"]["failed"]
 
 
 def test_cli_on_a_failing_book_prints_one_line_and_exits_2(

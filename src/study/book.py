@@ -247,15 +247,16 @@ def _failure_message(ch: Chapter, err: Any, nb: Any, root: Path) -> str:
     )
 
 
-def _execute(ch: Chapter, nb: Any, parameters: dict[str, Any], root: Path, workdir: Path) -> None:
-    """Run the chapter with papermill into its executed copy, atomically; raise ChapterError on failure."""
-    import nbformat
+def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], root: Path) -> None:
+    """Run ``source_nb`` (the chapter ``nb`` as .ipynb) with papermill into its executed copy, atomically.
+
+    Raises :class:`ChapterError` if a cell fails or the kernel dies; the partial copy goes to
+    ``_build/failed/`` and any older executed copy of the chapter is removed.
+    """
     import papermill
     from nbclient.exceptions import DeadKernelError
     from papermill.exceptions import PapermillExecutionError
 
-    source_nb = workdir / f"{ch.stem}.ipynb"
-    nbformat.write(nb, source_nb)
     running = root / RUNNING / f"{ch.entry}.ipynb"
     running.parent.mkdir(parents=True, exist_ok=True)
     try:
@@ -281,6 +282,7 @@ def _execute(ch: Chapter, nb: Any, parameters: dict[str, Any], root: Path, workd
         raise
     ch.executed.parent.mkdir(parents=True, exist_ok=True)
     os.replace(running, ch.executed)  # same filesystem: the complete copy appears in one step
+    ch.failed.unlink(missing_ok=True)
 
 
 def _write_key(ch: Chapter, base: dict[str, Any], parameters: dict[str, Any], root: Path, seconds: float) -> None:
@@ -302,20 +304,33 @@ def _stored(ch: Chapter) -> dict[str, Any] | None:
 # The whole build
 
 
-def execute(root: Path, preset: str, force: bool = False, only: list[str] | None = None) -> dict[str, dict[str, Any]]:
-    """Execute (or reuse) every chapter of ``root``'s book; returns {stem: {"seconds", "cached"}}.
+def _decide(ch: Chapter, current: str, force: bool, only: list[str] | None) -> tuple[str, dict[str, Any]]:
+    """``("cached" | "kept" | "execute", stored key record)`` for one chapter."""
+    stored = _stored(ch) or {}
+    if force or (only is not None and ch.stem in only):
+        return "execute", stored
+    if stored.get("key") == current:
+        return "cached", stored
+    if only is not None and ch.executed.is_file():
+        return "kept", stored  # out of date, but the user asked for other chapters only
+    return "execute", stored
 
-    ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, reusing the others'
+
+def execute(root: Path, preset: str, force: bool = False, only: list[str] | None = None) -> dict[str, dict[str, Any]]:
+    """Execute (or reuse) every chapter of ``root``'s book; returns {stem: {"seconds", "cached", ...}}.
+
+    ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, keeping the others'
     current copies, but a chapter that has no executed copy at all is always executed. Stops at the
-    first failing chapter with :class:`ChapterError`.
+    first failing chapter with :class:`ChapterError`. Also writes ``_build/executed/timings.json``.
     """
+    import nbformat
+
     root = Path(root).resolve()
     chs = chapters(root)
     stems = [c.stem for c in chs]
-    if only:
-        unknown = [s for s in only if s not in stems]
-        if unknown:
-            raise ConfigError(f"--only {', '.join(unknown)}: no such chapter; the chapters are: {', '.join(stems)}")
+    unknown = [s for s in only or [] if s not in stems]
+    if unknown:
+        raise ConfigError(f"--only {', '.join(unknown)}: no such chapter; the chapters are: {', '.join(stems)}")
     injected = {"preset": preset}
     package = source_hash()
     timings: dict[str, dict[str, Any]] = {}
@@ -326,15 +341,11 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
             for ch in bar:
                 bar.set_postfix_str(ch.stem)
                 nb = _read_notebook(ch.source)
-                if not _is_notebook(nb):
-                    target = root / EXECUTED / f"{ch.entry}.md"
-                    if not target.is_file() or target.read_bytes() != ch.source.read_bytes():
-                        write_text_atomic(target, ch.source.read_text())
+                if not _is_notebook(nb):  # a plain page: placed, never executed
+                    _copy_if_changed(ch.source, root / EXECUTED / f"{ch.entry}.md")
                     timings[ch.stem] = {"seconds": 0.0, "cached": True, "page": True}
                     continue
-                import nbformat
-
-                probe = Path(tmp) / f"{ch.stem}.probe.ipynb"
+                probe = Path(tmp) / f"{ch.stem}.ipynb"
                 nbformat.write(nb, probe)
                 parameters = notebook_parameters(probe, injected)
                 base = {
@@ -344,19 +355,19 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                     "kernel": KERNEL,
                 }
                 current = key({**base, "inputs": inputs_fingerprint(root, parameters)}, length=64)
-                stored = _stored(ch)
-                wanted = force or (only is not None and ch.stem in only)
-                if stored is not None and stored.get("key") == current and not wanted:
-                    timings[ch.stem] = {"seconds": stored.get("seconds", 0.0), "cached": True}
-                    tqdm.write(f"{ch.stem}: cached (executed earlier in {stored.get('seconds', 0.0):.1f} s)", file=sys.stderr)
-                    continue
-                if only is not None and ch.stem not in only and not force and ch.executed.is_file():
-                    seconds = (stored or {}).get("seconds", 0.0)
-                    timings[ch.stem] = {"seconds": seconds, "cached": True, "stale": True}
-                    tqdm.write(f"{ch.stem}: kept (out of date, not in --only)", file=sys.stderr)
+                action, stored = _decide(ch, current, force, only)
+                if action != "execute":
+                    seconds = stored.get("seconds", 0.0)
+                    timings[ch.stem] = {"seconds": seconds, "cached": True, **({"stale": True} if action == "kept" else {})}
+                    note = f"executed earlier in {seconds:.1f} s" if action == "cached" else "out of date; not in --only"
+                    tqdm.write(f"{ch.stem}: {action} ({note})", file=sys.stderr)
                     continue
                 t0 = time.perf_counter()
-                _execute(ch, nb, injected, root, Path(tmp))
+                try:
+                    _execute(ch, probe, nb, injected, root)
+                except ChapterError:
+                    timings[ch.stem] = {"seconds": round(time.perf_counter() - t0, 3), "cached": False, "failed": True}
+                    raise
                 seconds = time.perf_counter() - t0
                 done.append((ch, base, parameters, seconds))
                 timings[ch.stem] = {"seconds": round(seconds, 3), "cached": False}
@@ -368,10 +379,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         for ch, base, parameters, seconds in done:
             _write_key(ch, base, parameters, root, seconds)
         if timings:
-            write_text_atomic(
-                root / EXECUTED / "timings.json",
-                json.dumps({"preset": preset, "chapters": timings}, indent=1, sort_keys=False) + "\n",
-            )
+            record = {"preset": preset, "chapters": timings}
+            write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
     return timings
 
 
