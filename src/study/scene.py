@@ -84,7 +84,8 @@ def scene_xml(
         gravity, contact: switch gravity and contacts off for the free-flight check.
         rgba: the object's colour (for rendering).
     """
-    size = " ".join(f"{s:.6g}" for s in shape.size)
+    size = " ".join(f"{float(s)!r}" for s in shape.size)
+    mass, damping, stiffness, friction, timestep = map(float, (mass, damping, stiffness, friction, timestep))
     density = AIR_DENSITY if air else 0.0
     viscosity = AIR_VISCOSITY if air else 0.0
     flags = []
