@@ -6,6 +6,7 @@ each test pays only for the chapters it makes re-execute (a kernel start, about 
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import shutil
@@ -61,10 +62,14 @@ inputs = "inputs.txt"
 ```
 
 ```{code-cell} ipython3
+import os
+
+import study
 from myst_nb import glue
 
 glue("preset", preset)
 glue("content", open(inputs).read().strip())
+glue("env", [os.environ.get("PYTHONHASHSEED"), os.environ.get("MUJOCO_GL"), study.__file__], display=False)
 ```
 
 Preset: {glue:text}`preset`.
@@ -121,6 +126,17 @@ def executed(root: Path, stem: str) -> Path:
     return root / "_build" / "executed" / "book" / f"{stem}.ipynb"
 
 
+def glued(root: Path, stem: str, name: str) -> str:
+    """The text/plain of what chapter ``stem``'s executed copy glued under ``name``."""
+    nb = nbformat.read(executed(root, stem), as_version=4)
+    for cell in nb.cells:
+        for out in cell.get("outputs", []):
+            if out.get("metadata", {}).get("scrapbook", {}).get("name") == name:
+                # display=False stores it under application/papermill.record/text/plain
+                return next(v for k, v in out["data"].items() if k.endswith("text/plain"))
+    raise AssertionError(f"{stem} glued no {name!r}")
+
+
 def ran(timings: dict) -> set[str]:
     return {stem for stem, t in timings.items() if not t["cached"]}
 
@@ -140,9 +156,10 @@ def test_build_executes_injects_and_renders(tiny: Path) -> None:
     nb = nbformat.read(executed(tiny, "alpha"), as_version=4)
     injected = [c for c in nb.cells if "injected-parameters" in c.metadata.get("tags", [])]
     assert len(injected) == 1 and "preset = \"smoke\"" in injected[0].source
-    glued = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
-             if o.get("metadata", {}).get("scrapbook", {}).get("name") == "preset"]
-    assert glued and glued[0]["data"]["text/plain"] == "'smoke'"
+    assert glued(tiny, "alpha", "preset") == "'smoke'"
+    hashseed, mujoco_gl, study_file = ast.literal_eval(glued(tiny, "alpha", "env"))
+    assert hashseed == "0" and mujoco_gl == os.environ.get("MUJOCO_GL", "egl")
+    assert Path(study_file).resolve() == Path(book.__file__).resolve().parent / "__init__.py"
     html = (tiny / "_build" / "html" / "book" / "alpha.html").read_text()
     assert "Preset:" in html and "smoke" in html
     assert (tiny / "_build" / "html" / "index.html").is_file()
@@ -170,8 +187,7 @@ def test_changed_chapter_reexecutes_only_it(tiny: Path) -> None:
 def test_changed_input_file_reexecutes_the_chapter_that_names_it(tiny: Path) -> None:
     (tiny / "inputs.txt").write_text("second\n")
     assert ran(book.execute(tiny, "smoke")) == {"alpha"}
-    nb = nbformat.read(executed(tiny, "alpha"), as_version=4)
-    assert "'second'" in json.dumps(nb)
+    assert glued(tiny, "alpha", "content") == "'second'"
 
 
 def test_other_preset_reexecutes_everything(tiny: Path) -> None:
@@ -214,6 +230,13 @@ def test_folder_fingerprint_follows_the_files_inside(tmp_path: Path) -> None:
     assert set(first) == {"data_dir"}
     (tmp_path / "d" / "b.bin").write_bytes(b"22")
     assert book.inputs_fingerprint(tmp_path, params) != first
+
+
+@pytest.mark.slow
+def test_a_sphinx_warning_fails_the_html_build(tmp_path: Path) -> None:
+    write_book(tmp_path, {"notes": NOTES + "\nSee {ref}`no-such-label`.\n"}, "format: jb-book\nroot: book/notes\n")
+    with pytest.raises(ChapterError, match="jupyter-book build failed"):
+        book.build(tmp_path, "smoke", force=False, only=None, html=True)
 
 
 @pytest.fixture
