@@ -269,6 +269,9 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
                 cwd=str(root),
                 progress_bar=sys.stderr.isatty(),
                 log_output=False,
+                # The kernel's own log (not the cells' output) only warns that its local TCP link is
+                # unencrypted; errors still show.
+                extra_arguments=["--IPKernelApp.log_level=ERROR"],
             )
     except (PapermillExecutionError, DeadKernelError) as e:
         ch.executed.unlink(missing_ok=True)
@@ -420,9 +423,10 @@ def render(root: Path) -> Path:
     """Render the executed book to ``<root>/_build/html`` (execution off, warnings are errors)."""
     root = Path(root).resolve()
     src = _stage(root)
-    cmd = [*_jupyter_book(), "build", str(src), "--path-output", str(root), "--all", "-W", "-n", "--keep-going"]
+    # --all: a page left unchanged would otherwise not repeat its warnings, and -W would pass.
+    cmd = [*_jupyter_book(), "build", str(src), "--path-output", str(root), "--all", "-W", "-n", "--keep-going", "-q"]
     sys.stderr.flush()
-    proc = subprocess.run(cmd, cwd=root)
+    proc = subprocess.run(cmd, cwd=root, stdout=2)  # its log to stderr: stdout is left for the index path
     if proc.returncode != 0:
         raise ChapterError(
             f"jupyter-book build failed (exit {proc.returncode}) on {src.relative_to(root)}; "
