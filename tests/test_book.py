@@ -225,9 +225,11 @@ def test_missing_toc_is_a_config_error(tmp_path: Path) -> None:
 def test_folder_fingerprint_follows_the_files_inside(tmp_path: Path) -> None:
     (tmp_path / "d").mkdir()
     (tmp_path / "d" / "a.bin").write_bytes(b"1")
-    params = {"data_dir": "d", "preset": "smoke", "nothing": "no-such-file", "n": 3}
+    params = {"data_dir": "d", "preset": "smoke", "nothing": "no-such-file", "n": 3, "up": "..", "here": "."}
     first = book.inputs_fingerprint(tmp_path, params)
     assert set(first) == {"data_dir"}
+    (tmp_path / "d" / ".b.bin.x1y2.tmp").write_bytes(b"22")  # an atomic write in progress
+    assert book.inputs_fingerprint(tmp_path, params) == first
     (tmp_path / "d" / "b.bin").write_bytes(b"22")
     assert book.inputs_fingerprint(tmp_path, params) != first
 

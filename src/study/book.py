@@ -154,26 +154,32 @@ def notebook_parameters(nb_path: Path, injected: dict[str, Any]) -> dict[str, An
 
 
 def _fingerprint_path(p: Path) -> list[Any]:
-    """A file: its size and SHA-256. A folder: every file inside by relative name, size and mtime."""
+    """A file: its size and SHA-256. A folder: every file inside by relative name, size and mtime.
+
+    Hidden files are left out: they include the temporary files of atomic writes still in progress.
+    """
     if p.is_file():
         return ["file", p.stat().st_size, hashlib.sha256(p.read_bytes()).hexdigest()]
     files = []
-    for f in sorted(q for q in p.rglob("*") if q.is_file()):
-        st = f.stat()
-        files.append([f.relative_to(p).as_posix(), st.st_size, st.st_mtime_ns])
+    for f in sorted(p.rglob("*")):
+        rel = f.relative_to(p)
+        if f.is_file() and not any(part.startswith(".") for part in rel.parts):
+            st = f.stat()
+            files.append([rel.as_posix(), st.st_size, st.st_mtime_ns])
     return ["dir", files]
 
 
 def inputs_fingerprint(root: Path, parameters: dict[str, Any]) -> dict[str, Any]:
     """For each string parameter that names an existing file or folder (relative to ``root``), its fingerprint."""
     out: dict[str, Any] = {}
+    here = root.resolve()
     for name, value in sorted(parameters.items()):
-        if not isinstance(value, str) or value.strip() in ("", "."):
+        if not isinstance(value, str) or not value.strip():
             continue
         try:
             p = (root / value).resolve()
-            if p == root.resolve() or not p.exists():
-                continue
+            if here.is_relative_to(p) or not p.exists():
+                continue  # the project itself or a folder above it is not an input
         except (OSError, ValueError):
             continue
         out[name] = [value, _fingerprint_path(p)]
