@@ -63,18 +63,41 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
         "book",
         help="execute the chapters with papermill and build the HTML book",
         description=(
-            "Execute each chapter of book/ (jupytext MyST sources) with papermill, injecting the "
-            "preset, into executed copies under _build/executed, then build the Jupyter Book to "
-            "_build/html with execution off, failing on warnings. A chapter re-executes only when "
-            "its source, its parameters, the study package or its inputs changed."
+            "Execute each chapter listed in _toc.yml (jupytext MyST sources in book/) with papermill, "
+            "injecting the preset into its 'parameters' cell, into executed copies under "
+            "_build/executed/book/; then build the Jupyter Book from those copies into _build/html "
+            "with execution off and every warning an error. A chapter re-executes only when its "
+            "source, the preset, the study package, or a file or folder named by one of its string "
+            "parameters changed. A failing cell stops the run with one line naming the chapter and "
+            "cell; its partial copy is kept in _build/failed/. Per-chapter times are written to "
+            "_build/executed/timings.json. Prints the path of index.html."
         ),
     )
-    p.add_argument("--preset", choices=["smoke", "paper"], default="paper", help="chapter preset (default: %(default)s)")
+    p.add_argument(
+        "--preset",
+        choices=["smoke", "paper"],
+        default="paper",
+        help="injected as the chapters' 'preset' parameter: 'paper' = the paper's scale; 'smoke' = "
+        "tiny runs, for tests (default: %(default)s)",
+    )
     p.add_argument("--force", action="store_true", help="re-execute every chapter even if its cached copy is current")
-    p.add_argument("--only", metavar="CHAPTER", action="append", default=None,
-                   help="execute only this chapter (by file stem, e.g. 'data'); repeatable; the book is still built")
-    p.add_argument("--root", type=Path, default=Path("."), help="project root holding _config.yml, _toc.yml, book/ (default: .)")
-    p.add_argument("--no-build", action="store_true", help="execute chapters but skip jupyter-book build")
+    p.add_argument(
+        "--only",
+        metavar="CHAPTER",
+        action="append",
+        default=None,
+        help="re-execute this chapter (by file stem, e.g. 'data'), even if cached; repeatable. The other "
+        "chapters keep their executed copies, even out-of-date ones, except that a chapter with no "
+        "copy at all is executed; the whole book is still built",
+    )
+    p.add_argument(
+        "--root",
+        type=Path,
+        default=Path("."),
+        help="project root holding _config.yml, _toc.yml and book/; chapters run with it as their "
+        "working folder (default: .)",
+    )
+    p.add_argument("--no-build", action="store_true", help="execute the chapters but skip the jupyter-book build")
 
     def run(a: argparse.Namespace) -> int:
         from study import book
