@@ -174,13 +174,16 @@ def _renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Renderer
         return mujoco.Renderer(model, height, width)
     except Exception as first:
         if gl == "egl":
+            from mujoco.rendering.classic import gl_context
+
+            original = getattr(gl_context, "GLContext", None)
             try:  # the renderer looks its context class up at construction: swap in OSMesa's
                 from mujoco.osmesa import GLContext
-                from mujoco.rendering.classic import gl_context
 
                 gl_context.GLContext = GLContext
                 return mujoco.Renderer(model, height, width)
             except Exception as second:
+                gl_context.GLContext = original
                 raise RenderError(
                     f"MuJoCo cannot render: EGL failed ({first}) and OSMesa failed ({second}); install "
                     "the system library libEGL (apt install libegl1) or libOSMesa (apt install libosmesa6)"

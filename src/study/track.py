@@ -507,7 +507,7 @@ def write_csv(traj: Trajectory, path: str | Path) -> Path:
     h = traj.height
     for i in range(len(traj.t)):
         lines.append(
-            f"{i},{traj.t[i]:.6f},{traj.u[i]:.3f},{traj.v[i]:.3f},{h[i]:.6g},{STATUS[traj.status[i]]},"
+            f"{i},{traj.t[i]:.9f},{traj.u[i]:.3f},{traj.v[i]:.3f},{h[i]:.6g},{STATUS[traj.status[i]]},"
             f"{traj.segment[i]},{traj.confidence[i]:.3f}"
         )
     write_text_atomic(path, "\n".join(lines) + "\n")
@@ -579,3 +579,36 @@ def write_overlay(traj: Trajectory, out: str | Path, tail: int = 60, progress: b
                     cv2.circle(bgr, tuple(int(round(x)) for x in pts[i]), r, colours[int(traj.status[i])], 2, cv2.LINE_AA)
             w.write(bgr)
     return Path(out)
+
+
+def bounces(traj: Trajectory, min_rise: float | None = None) -> np.ndarray:
+    """Row indices of the bounces in ``traj``: lowest points between a fall and a rise of at least ``min_rise``.
+
+    Looks within each piece (measured and filled rows); ``min_rise`` is in the units of
+    :attr:`Trajectory.height`, by default a tenth of the piece's height range. A final rest is not a
+    bounce (nothing rises after it).
+    """
+    out: list[int] = []
+    h_all = traj.height
+    for s in np.unique(traj.segment[traj.segment >= 0]):
+        idx = np.nonzero(traj.segment == s)[0]
+        h = h_all[idx]
+        if len(h) < 3:
+            continue
+        rise = 0.1 * float(np.ptp(h)) if min_rise is None else float(min_rise)
+        if rise <= 0:
+            continue
+        mode, hi, lo = 0, 0, 0  # mode 0/1: following a rise (tracking its top); -1: following a fall
+        for i in range(1, len(h)):
+            if mode >= 0:
+                if h[i] > h[hi]:
+                    hi = i
+                if h[i] < h[hi] - rise:
+                    mode, lo = -1, i
+            if mode == -1:
+                if h[i] < h[lo]:
+                    lo = i
+                if h[i] > h[lo] + rise:
+                    out.append(int(idx[lo]))
+                    mode, hi = 1, i
+    return np.asarray(out, int)
