@@ -29,7 +29,7 @@ from tqdm.auto import tqdm
 
 from study.cache import write_text_atomic
 from study.errors import ConfigError, TrackingError, TrajectoryError, check_range
-from study.video import atomic_writer, frames, probe
+from study.video import atomic_writer, frames, probe, stream
 
 PRESETS: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
     "tennis": ((22, 70, 90), (50, 255, 255)),
@@ -66,7 +66,7 @@ class TrackConfig:
     """Longest run of missing frames filled by interpolation; longer gaps split the trajectory."""
     min_found: int = 8
     """Fewest frames the object must be found in, else :class:`TrackingError`."""
-    search_width: int = 480
+    search_width: int = 320
     """Full-frame (re)acquisition runs on the frame subsampled to at most this width, pixels."""
     static_time: float = 0.5
     """A blob that stays put (within a pixel or two) this long, seconds, is scenery: it is ignored from then on."""
@@ -194,12 +194,6 @@ class Trajectory:
         return replace(self, **arrays)
 
 
-def _components(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(stats (k, 5) int: x, y, w, h, area; centroids (k, 2) float) of the foreground components."""
-    n, _, stats, cents = cv2.connectedComponentsWithStats(mask, connectivity=8, ltype=cv2.CV_32S)
-    return stats[1:], cents[1:]
-
-
 class _Detector:
     """Finds the object in one frame, remembering where it was to search near there first."""
 
@@ -209,30 +203,32 @@ class _Detector:
         self.cfg = cfg
         self.lo, self.hi = cfg.bounds()
         self.wrap = int(self.lo[0]) > int(self.hi[0])
+        if self.wrap:  # two ranges: [lo_h, 179] and [0, hi_h]
+            self.ranges = [(self.lo, np.array([179, self.hi[1], self.hi[2]], np.uint8)),
+                           (np.array([0, self.lo[1], self.lo[2]], np.uint8), self.hi)]
+        else:
+            self.ranges = [(self.lo, self.hi)]
         self.W, self.H = width, height
-        self.diag = math.hypot(width, height)
+        self.gate = cfg.max_jump * math.hypot(width, height)
         self.max_area = cfg.max_area_frac * width * height
         self.step = max(1, math.ceil(width / cfg.search_width))
         self.prev: list[tuple[float, float]] = []  # last two found centroids (for a constant-velocity guess)
-        self.size = 0.0  # last diameter, pixels
+        self.size = 0.0  # last equivalent-disc diameter, pixels
         self.still = max(5, round(cfg.static_time * fps))  # frames a blob must stay put to count as scenery
         self.recent: list[tuple[float, float]] = []  # centroids of the current run of found frames
         self.moved = False  # whether the current run has moved since its first frame
-        self.static = np.zeros((0, 3))  # (k, 3) u, v, radius of blobs judged to be scenery
+        self.static: list[tuple[float, float, float]] = []  # u, v, radius of blobs judged to be scenery
 
-    def mask(self, bgr: np.ndarray) -> np.ndarray:
+    def mask(self, bgr: np.ndarray, close: bool = True) -> np.ndarray:
+        """(h, w) uint8 mask of the pixels in the HSV range, closed with a 3x3 disc unless ``close`` is False."""
         hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
+        m = cv2.inRange(hsv, *self.ranges[0])
         if self.wrap:
-            lo1, hi1 = self.lo.copy(), self.hi.copy()
-            hi1[0] = 179
-            lo2 = self.lo.copy()
-            lo2[0] = 0
-            m = cv2.inRange(hsv, lo1, hi1) | cv2.inRange(hsv, lo2, self.hi)
-        else:
-            m = cv2.inRange(hsv, self.lo, self.hi)
-        return cv2.morphologyEx(m, cv2.MORPH_CLOSE, self.KERNEL)
+            m |= cv2.inRange(hsv, *self.ranges[1])
+        return cv2.morphologyEx(m, cv2.MORPH_CLOSE, self.KERNEL) if close else m
 
     def predict(self) -> tuple[float, float] | None:
+        """Where the object should be now (constant velocity from the last two centroids), or None."""
         if not self.prev:
             return None
         if len(self.prev) == 1:
@@ -240,80 +236,93 @@ class _Detector:
         (u0, v0), (u1, v1) = self.prev[-2], self.prev[-1]
         return 2 * u1 - u0, 2 * v1 - v0
 
-    def _best(self, stats, cents, scale: float, origin, pred):
-        """Index and confidence of the most plausible component (areas scaled by ``scale``^2), or None."""
-        area = stats[:, 4].astype(float) * scale * scale
-        ok = (area >= self.cfg.min_area) & (area <= self.max_area)
-        ok &= np.minimum(stats[:, 2], stats[:, 3]) * scale >= self.cfg.min_width
-        if not ok.any():
+    def _search(self, bgr: np.ndarray, box: tuple[int, int, int, int], k: int, pred):
+        """The best component in ``bgr[box]`` (x0, y0, x1, y1) subsampled by ``k``: (conf, (u, v), area) or None."""
+        x0, y0, x1, y1 = max(0, box[0]), max(0, box[1]), min(self.W, box[2]), min(self.H, box[3])
+        if x1 - x0 < 2 or y1 - y0 < 2:
             return None
-        c = cents * scale + np.asarray(origin, float)
-        for su, sv, sr in self.static:
-            ok &= np.hypot(c[:, 0] - su, c[:, 1] - sv) > sr
-        if not ok.any():
+        crop = bgr[y0:y1:k, x0:x1:k] if k > 1 else bgr[y0:y1, x0:x1]
+        m = self.mask(np.ascontiguousarray(crop) if k > 1 else crop, close=False)
+        if not cv2.countNonZero(m):
             return None
-        w, h = stats[:, 2] * scale, stats[:, 3] * scale
-        fill = np.minimum(1.0, area / (np.pi * (np.maximum(w, h) / 2) ** 2))  # 1 for a disc, small for a line
-        if pred is None:
-            score = np.where(ok, area * fill, -1.0)  # nothing to be near: the biggest compact blob
-            i = int(np.argmax(score))
-            closeness = 1.0
-        else:
-            d = np.hypot(c[:, 0] - pred[0], c[:, 1] - pred[1])
-            gate = self.cfg.max_jump * self.diag
-            ok &= d <= gate
-            if not ok.any():
-                return None
-            score = np.where(ok, d - 0.25 * np.sqrt(area), np.inf)  # near first; a bigger blob wins a close call
-            i = int(np.argmin(score))
-            closeness = math.exp(-((d[i] / gate) ** 2))
-        return i, float(fill[i]) * closeness, c[i], area[i]
+        cands = None
+        if pred is not None and self.size > 0:
+            # Fast path: if everything in range fits in a box the object's size, it is one blob, and
+            # its moments give area and centroid without labelling components.
+            x, y, w, h = cv2.boundingRect(m)
+            if max(w, h) * k <= 1.5 * self.size + 3 * k:
+                xa, ya = max(0, x - 1), max(0, y - 1)
+                sub = cv2.morphologyEx(m[ya : y + h + 1, xa : x + w + 1], cv2.MORPH_CLOSE, self.KERNEL)
+                M = cv2.moments(sub, True)
+                if M["m00"] > 0:
+                    cands = [((x, y, w, h, M["m00"]), (xa + M["m10"] / M["m00"], ya + M["m01"] / M["m00"]))]
+        if cands is None:
+            m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, self.KERNEL)
+            n, _, stats, cents = cv2.connectedComponentsWithStats(m, connectivity=8, ltype=cv2.CV_32S)
+            cands = zip(stats.tolist()[1:], cents.tolist()[1:])
+        best, best_score = None, math.inf
+        k2, min_area, max_area, min_w = k * k, self.cfg.min_area, self.max_area, self.cfg.min_width
+        # Plain Python over plain lists: one to a few components, where numpy's per-call cost dominates.
+        for (x, y, w, h, area), (cu, cv) in cands:
+            area *= k2
+            if area < min_area or area > max_area or min(w, h) * k < min_w:
+                continue
+            u, v = x0 + k * cu, y0 + k * cv
+            if self.static and any(math.hypot(u - su, v - sv) <= sr for su, sv, sr in self.static):
+                continue
+            fill = min(1.0, area / (math.pi * (max(w, h) * k / 2) ** 2))  # 1 for a disc, small for a line
+            if pred is None:
+                score, close = -area * fill, 1.0  # nothing to be near: the biggest compact blob
+            else:
+                d = math.hypot(u - pred[0], v - pred[1])
+                if d > self.gate:
+                    continue
+                score, close = d - 0.25 * math.sqrt(area), math.exp(-((d / self.gate) ** 2))  # near first
+            if score < best_score:
+                best, best_score = (fill * close, (u, v), float(area)), score
+        return best
 
-    def _window(self, bgr, centre, half):
-        x0 = int(max(0, centre[0] - half))
-        y0 = int(max(0, centre[1] - half))
-        x1 = int(min(self.W, centre[0] + half + 1))
-        y1 = int(min(self.H, centre[1] + half + 1))
-        if x1 <= x0 or y1 <= y0:
-            return None
-        stats, cents = _components(self.mask(bgr[y0:y1, x0:x1]))
-        return stats, cents, (x0, y0)
+    def _refine(self, bgr: np.ndarray, hit, k: int):
+        """Re-measure a hit found at subsampling ``k`` at full resolution in a tight box around it."""
+        if k == 1:
+            return hit
+        (u, v), r = hit[1], math.sqrt(hit[2] / math.pi) + 2 * k
+        fine = self._search(bgr, (int(u - r), int(v - r), int(u + r) + 2, int(v + r) + 2), 1, (u, v))
+        return fine or hit
 
     def __call__(self, bgr: np.ndarray) -> tuple[float, float, float, float] | None:
         """(u, v, confidence, diameter) of the object in ``bgr`` (H, W, 3) uint8, or None if not found."""
         pred = self.predict()
         hit, jumped = None, False
-        if pred is not None:  # fast path: a window around the prediction, full resolution
-            half = max(24.0, 3.0 * self.size, 1.5 * math.dist(*self.prev[-2:]) if len(self.prev) > 1 else 0.0)
-            win = self._window(bgr, pred, half)
-            if win is not None:
-                hit = self._best(win[0], win[1], 1.0, win[2], pred)
+        if pred is not None:  # fast path: a window around the prediction
+            speed = math.dist(*self.prev[-2:]) if len(self.prev) > 1 else 0.0
+            k = max(1, int(self.size // 12))  # keep the object about 12 samples across
+            # A small window first (constant velocity predicts free flight to a pixel), a wider one
+            # for bounces and throws, where the velocity flips or jumps.
+            for half in (self.size + 0.5 * speed + 6, 1.5 * self.size + 2.5 * speed + 12):
+                box = (int(pred[0] - half), int(pred[1] - half), int(pred[0] + half) + 1, int(pred[1] + half) + 1)
+                hit = self._search(bgr, box, k, pred)
+                if hit is not None:
+                    hit = self._refine(bgr, hit, k)
+                    break
         if hit is None:  # reacquire: the whole frame, subsampled
-            small = bgr[:: self.step, :: self.step]
-            stats, cents = _components(self.mask(np.ascontiguousarray(small)))
-            coarse = self._best(stats, cents, float(self.step), (0.0, 0.0), pred)
-            if coarse is None and pred is not None:
-                coarse = self._best(stats, cents, float(self.step), (0.0, 0.0), None)
-            if coarse is None:
+            box = (0, 0, self.W, self.H)
+            hit = self._search(bgr, box, self.step, pred)
+            if hit is None and pred is not None:
+                hit = self._search(bgr, box, self.step, None)
+            if hit is None:
                 self.prev.clear()
                 self.recent.clear()
                 return None
-            _, _, c, area = coarse
-            if self.step > 1:  # refine the centroid at full resolution
-                win = self._window(bgr, c, max(8.0, 2.0 * math.sqrt(area)))
-                fine = self._best(win[0], win[1], 1.0, win[2], tuple(c)) if win is not None else None
-                hit = fine or coarse
-            else:
-                hit = coarse
+            hit = self._refine(bgr, hit, self.step)
             if pred is not None:
-                hit = (hit[0], hit[1] * 0.5, hit[2], hit[3])  # a jump: less sure
-                jumped = True
-        _, conf, c, area = hit
+                hit, jumped = (hit[0] * 0.5, hit[1], hit[2]), True  # a jump: less sure
+        conf, (u, v), area = hit
         self.size = 2 * math.sqrt(area / math.pi)
-        self.prev = (self.prev + [(float(c[0]), float(c[1]))])[-2:]
+        self.prev = (self.prev + [(u, v)])[-2:]
         if jumped or not self.recent:  # a new run of found frames starts here
             self.recent, self.moved = [], False
-        self.recent.append((float(c[0]), float(c[1])))
+        self.recent.append((u, v))
         tol = max(3.0, 0.5 * self.size)  # compression jitters a still blob's centroid by a pixel or two
         if not self.moved and math.dist(self.recent[0], self.recent[-1]) > tol:
             self.moved = True
@@ -321,11 +330,12 @@ class _Detector:
             # found where it was first seen and never moved since: scenery. (An object that came to
             # rest after moving is kept.)
             r = np.asarray(self.recent)
-            self.static = np.vstack([self.static, [*r.mean(axis=0), max(3.0, 0.75 * self.size)]])
+            cu, cv = r.mean(axis=0)
+            self.static.append((float(cu), float(cv), max(3.0, 0.75 * self.size)))
             self.prev.clear()
             self.recent.clear()
         self.recent = self.recent[-self.still :]
-        return float(c[0]), float(c[1]), float(conf), self.size
+        return float(u), float(v), float(conf), self.size
 
 
 def detect_all(path: str | Path, cfg: TrackConfig | None = None) -> Trajectory:
@@ -337,12 +347,12 @@ def detect_all(path: str | Path, cfg: TrackConfig | None = None) -> Trajectory:
     """
     cfg = cfg or TrackConfig()
     cfg.validate()
-    info = probe(path)
+    info, decoded = stream(path)
     det = _Detector(cfg, info.width, info.height, info.fps)
     rows: list[tuple[float, float, float, float]] = []
     nan4 = (math.nan, math.nan, 0.0, math.nan)
     total = info.frames or None
-    for bgr in tqdm(frames(path), total=total, desc=f"track {info.path.name}", unit="frame", disable=not cfg.progress, leave=False):
+    for bgr in tqdm(decoded, total=total, desc=f"track {info.path.name}", unit="frame", disable=not cfg.progress, leave=False):
         found = det(bgr)
         rows.append(found if found is not None else nan4)
     a = np.array(rows, float).reshape(-1, 4)

@@ -80,29 +80,38 @@ def probe(path: str | Path) -> VideoInfo:
     return info
 
 
-def frames(path: str | Path) -> Iterator[np.ndarray]:
-    """Yield the frames of ``path`` one by one, (H, W, 3) uint8 BGR; streaming, constant memory.
+def stream(path: str | Path) -> tuple[VideoInfo, Iterator[np.ndarray]]:
+    """Open ``path`` once: its :class:`VideoInfo` and an iterator over its frames, (H, W, 3) uint8 BGR.
 
-    Raises :class:`VideoError` (after the last frame) if no frame decodes, or far fewer than the
-    container lists (a truncated file).
+    Streaming, constant memory. The iterator raises :class:`VideoError` (after the last frame) if no
+    frame decodes, or far fewer than the container lists (a truncated file).
     """
     cap, info = open_video(path)
-    n = 0
-    try:
-        while True:
-            ok, frame = cap.read()
-            if not ok:
-                break
-            n += 1
-            yield frame
-    finally:
-        cap.release()
-    if n == 0:
-        raise VideoError(f"video {info.path}: no frame could be decoded; the file is empty or truncated")
-    if info.frames > 0 and n < TRUNCATED_FRACTION * info.frames:
-        raise VideoError(
-            f"video {info.path}: truncated: decoded {n} of the {info.frames} frames the container lists; re-copy it"
-        )
+
+    def gen() -> Iterator[np.ndarray]:
+        n = 0
+        try:
+            while True:
+                ok, frame = cap.read()
+                if not ok:
+                    break
+                n += 1
+                yield frame
+        finally:
+            cap.release()
+        if n == 0:
+            raise VideoError(f"video {info.path}: no frame could be decoded; the file is empty or truncated")
+        if info.frames > 0 and n < TRUNCATED_FRACTION * info.frames:
+            raise VideoError(
+                f"video {info.path}: truncated: decoded {n} of the {info.frames} frames the container lists; re-copy it"
+            )
+
+    return info, gen()
+
+
+def frames(path: str | Path) -> Iterator[np.ndarray]:
+    """Yield the frames of ``path`` one by one (see :func:`stream`)."""
+    yield from stream(path)[1]
 
 
 @contextlib.contextmanager
