@@ -84,7 +84,8 @@ def scene_xml(
         gravity, contact: switch gravity and contacts off for the free-flight check.
         rgba: the object's colour (for rendering).
     """
-    size = " ".join(f"{s:.6g}" for s in shape.size)
+    size = " ".join(f"{float(s)!r}" for s in shape.size)
+    mass, damping, stiffness, friction, timestep = map(float, (mass, damping, stiffness, friction, timestep))
     density = AIR_DENSITY if air else 0.0
     viscosity = AIR_VISCOSITY if air else 0.0
     flags = []
@@ -93,6 +94,7 @@ def scene_xml(
     if not contact:
         flags.append('contact="disable"')
     flag = f"<flag {' '.join(flags)}/>" if flags else ""
+    condim = 3 if friction > 0 else 1  # a zero-width friction pyramid is degenerate: drop friction instead
     r, g, b, a = rgba
     # priority="1" makes the object's solref, solimp and friction the contact's own: no mixing with the floor's.
     return f"""<mujoco model="throw">
@@ -112,7 +114,7 @@ def scene_xml(
       <freejoint name="object"/>
       <geom name="object" type="{shape.kind}" size="{size}" mass="{mass!r}" priority="1"
             solref="{-stiffness!r} {-damping!r}" solimp="0.95 0.99 0.001 0.5 2"
-            friction="{friction!r} 0.005 0.0001" condim="3" fluidshape="ellipsoid" rgba="{r} {g} {b} {a}"/>
+            friction="{friction!r} 0.005 0.0001" condim="{condim}" fluidshape="ellipsoid" rgba="{r} {g} {b} {a}"/>
     </body>
   </worldbody>
 </mujoco>"""

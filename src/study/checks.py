@@ -1,0 +1,113 @@
+"""Physics checks of the simulation settings, shared by the tests (which assert them) and the data
+chapter (which plots them): free flight against the analytic parabola, restitution from bounce
+heights against the value set, penetration against its bound, energy between flights, rest, and the
+timestep convergence of the measured restitution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from study.contact import damping_for_restitution, drop_test
+from study.synth import GRAVITY, SynthConfig, build_model, staggered_qvel
+
+
+def free_flight_error(cfg: SynthConfig, qpos0: np.ndarray, qvel0: np.ndarray, duration: float = 1.0) -> float:
+    """Largest distance, metres, between simulated and analytic free-flight centre positions.
+
+    Air off and the object launched high enough that it cannot reach the ground in ``duration``
+    seconds (asserted); compares every step with ``p0 + v0 t - g t^2 / 2``.
+    """
+    m = build_model(cfg.replace(air=False), mass=1.0, damping=100.0, friction=0.5)
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos0
+    d.qvel[:] = staggered_qvel(qvel0, m.opt.timestep)
+    worst = 0.0
+    for k in range(1, int(round(duration / m.opt.timestep)) + 1):
+        mujoco.mj_step(m, d)
+        assert d.ncon == 0, "free-flight check touched the ground; launch higher"
+        t = k * m.opt.timestep
+        exact = qpos0[:3] + qvel0[:3] * t + np.array([0.0, 0.0, -GRAVITY * t * t / 2])
+        worst = max(worst, float(np.linalg.norm(d.qpos[:3] - exact)))
+    return worst
+
+
+def restitution_from_drops(cfg: SynthConfig, restitution: float, *, drop: float = 1.0, mass: float = 1.0, bounces: int = 3) -> np.ndarray:
+    """Restitutions ``sqrt(h[i+1] / h[i])`` of successive apexes of a flat drop (no air, no spin).
+
+    Heights are of the lowest point above the ground; bounces lower than 5 mm are left out (the
+    contact's 1 mm impedance width and the frame of a nearly resting object dominate there).
+    """
+    b = float(damping_for_restitution(restitution, cfg.shape, stiffness=cfg.stiffness, timestep=cfg.timestep))
+    h = drop_test(cfg.shape, b, stiffness=cfg.stiffness, timestep=cfg.timestep, drop=drop, mass=mass, bounces=bounces)
+    h = h[h >= 0.005]
+    return np.sqrt(h[1:] / h[:-1])
+
+
+@dataclass
+class Trace:
+    """Every step of one simulated throw (SI units)."""
+
+    t: np.ndarray
+    """(N,) seconds."""
+    pos: np.ndarray
+    """(N, 3) centre position, metres."""
+    speed: np.ndarray
+    """(N,) centre speed, m/s."""
+    in_contact: np.ndarray
+    """(N,) bool: at least one contact with the ground."""
+    depth: np.ndarray
+    """(N,) deepest penetration into the ground, metres (0 when not touching)."""
+    energy: np.ndarray
+    """(N,) mechanical energy m g z + translational + rotational kinetic, joules."""
+
+    def flight_energies(self, min_steps: int = 20) -> np.ndarray:
+        """Mean mechanical energy of each flight phase (a run of >= ``min_steps`` steps without contact), J."""
+        out, start = [], None
+        free = ~self.in_contact
+        for i, f in enumerate(np.append(free, False)):
+            if f and start is None:
+                start = i
+            elif not f and start is not None:
+                if i - start >= min_steps:
+                    out.append(float(self.energy[start:i].mean()))
+                start = None
+        return np.array(out)
+
+
+def trace(cfg: SynthConfig, params: dict[str, np.ndarray], i: int, duration: float | None = None) -> Trace:
+    """Simulate trajectory ``i`` of a split's ``params`` step by step and record diagnostics."""
+    m = build_model(cfg, params["mass"][i], params["damping"][i], params["friction"][i])
+    d = mujoco.MjData(m)
+    d.qpos[:] = params["qpos0"][i]
+    d.qvel[:] = staggered_qvel(params["qvel0"][i], m.opt.timestep)
+    n = int(round((duration or cfg.duration) / m.opt.timestep))
+    mass, inertia = float(m.body_mass[1]), m.body_inertia[1].copy()
+    t, pos, speed = np.empty(n), np.empty((n, 3)), np.empty(n)
+    contact, depth, energy = np.zeros(n, bool), np.zeros(n), np.empty(n)
+    for k in range(n):
+        mujoco.mj_step(m, d)
+        t[k], pos[k] = d.time, d.qpos[:3]
+        v, w = d.qvel[:3], d.qvel[3:6]
+        speed[k] = np.linalg.norm(v)
+        energy[k] = mass * GRAVITY * d.qpos[2] + 0.5 * mass * v @ v + 0.5 * w @ (inertia * w)
+        if d.ncon:
+            contact[k] = True
+            depth[k] = max(0.0, -min(d.contact[j].dist for j in range(d.ncon)))
+    return Trace(t=t, pos=pos, speed=speed, in_contact=contact, depth=depth, energy=energy)
+
+
+def convergence(cfg: SynthConfig, restitutions: np.ndarray) -> dict[str, np.ndarray]:
+    """Measured first-bounce restitution at the config's timestep and at half of it, same damping.
+
+    Returns ``{"set": e, "dt": measured at dt, "dt/2": measured at dt/2}``, each (k,).
+    """
+    from study.contact import measured_restitution
+
+    dt = cfg.timestep
+    b = damping_for_restitution(np.asarray(restitutions), cfg.shape, stiffness=cfg.stiffness, timestep=dt)
+    at = lambda step: np.array([measured_restitution(cfg.shape, x, stiffness=cfg.stiffness, timestep=step) for x in b])  # noqa: E731
+    return {"set": np.asarray(restitutions, float), "dt": at(dt), "dt/2": at(dt / 2)}

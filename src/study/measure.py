@@ -1,0 +1,106 @@
+"""Measurements on trajectories: bounces, time to rest, distance travelled, and one-feature rules.
+
+These work on what a camera gives, centre positions at the frame rate, (T, 3) or (n, T, 3) metres,
+and serve both the dataset statistics in the book and the paper's claim that no simple rule
+separates the classes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+MIN_RISE = 0.02
+"""A bounce is a local maximum of height at least this far (metres) above the preceding minimum."""
+REST_SPEED = 0.05
+"""Speed (m/s) below which the object counts as at rest, if it stays below for the rest of the record."""
+
+
+def bounce_count(z: np.ndarray, min_rise: float = MIN_RISE) -> np.ndarray | int:
+    """Number of bounces in each height series.
+
+    ``z``: (T,) or (n, T) metres. A bounce is an apex (local maximum) at least ``min_rise`` above the
+    lowest valley (local minimum) since the previous apex; the launch is no valley, so a throw that
+    starts by rising is not a bounce. Returns an int for (T,), (n,) int64 for (n, T).
+    """
+    z = np.asarray(z, dtype=float)
+    single = z.ndim == 1
+    out = np.zeros(len(np.atleast_2d(z)), dtype=np.int64)
+    for i, s in enumerate(np.atleast_2d(z)):
+        low = np.inf
+        for t in range(1, len(s) - 1):
+            if s[t] < s[t - 1] and s[t] <= s[t + 1]:
+                low = min(low, s[t])
+            elif s[t] >= s[t - 1] and s[t] > s[t + 1] and s[t] - low >= min_rise:
+                out[i] += 1
+                low = np.inf
+    return int(out[0]) if single else out
+
+
+def speeds(x: np.ndarray, fps: float) -> np.ndarray:
+    """Centre speed between frames, m/s: (n, T-1) from (n, T, 3)."""
+    return np.linalg.norm(np.diff(np.asarray(x, dtype=float), axis=-2), axis=-1) * fps
+
+
+def time_to_rest(x: np.ndarray, fps: float, rest_speed: float = REST_SPEED) -> np.ndarray:
+    """Seconds until the speed drops below ``rest_speed`` for good: (n,) from (n, T, 3).
+
+    An object still moving at the end of the record gets the record's length (a lower bound).
+    """
+    v = speeds(x, fps)
+    moving = v >= rest_speed
+    T = v.shape[-1]
+    last = np.where(moving.any(axis=-1), T - 1 - np.argmax(moving[..., ::-1], axis=-1), -1)
+    return (last + 1) / fps
+
+
+def horizontal_distance(x: np.ndarray) -> np.ndarray:
+    """Distance in the ground plane from the first to the last frame, metres: (n,) from (n, T, 3)."""
+    x = np.asarray(x, dtype=float)
+    return np.linalg.norm(x[..., -1, :2] - x[..., 0, :2], axis=-1)
+
+
+def best_threshold_rule(f_train: np.ndarray, y_train: np.ndarray, f_test: np.ndarray, y_test: np.ndarray) -> dict:
+    """The best one-feature rule ``label = [f > t]`` or ``[f <= t]``, chosen on train, scored on test.
+
+    Returns threshold, direction ('>' predicts heavy above t, '<=' below), train and test accuracy.
+    """
+    f_train, f_test = np.asarray(f_train, float), np.asarray(f_test, float)
+    cands = np.unique(f_train)
+    cands = np.concatenate([[cands[0] - 1.0], (cands[:-1] + cands[1:]) / 2, [cands[-1] + 1.0]])
+    best = (-1.0, 0.0, ">")
+    for t in cands:
+        for direction in (">", "<="):
+            pred = f_train > t if direction == ">" else f_train <= t
+            acc = float(np.mean(pred == (y_train == 1)))
+            if acc > best[0]:
+                best = (acc, float(t), direction)
+    acc, t, direction = best
+    pred = f_test > t if direction == ">" else f_test <= t
+    return {"threshold": t, "direction": direction, "train_accuracy": acc, "test_accuracy": float(np.mean(pred == (y_test == 1)))}
+
+
+FEATURES = {
+    "bounces": "number of bounces (rises of 2 cm or more)",
+    "time_to_rest": "time until the object stops, s",
+    "distance": "distance travelled in the ground plane, m",
+    "max_height_after_1s": "highest point after the first second, m",
+}
+"""The one-number summaries a simple rule could threshold, with their meaning and unit."""
+
+
+def features(x: np.ndarray, fps: float) -> dict[str, np.ndarray]:
+    """Each of :data:`FEATURES` for every trajectory of ``x`` (n, T, 3) metres: name -> (n,) array."""
+    x = np.asarray(x, dtype=float)
+    after = x[:, int(round(fps)) :, 2]
+    return {
+        "bounces": bounce_count(x[:, :, 2]).astype(float),
+        "time_to_rest": time_to_rest(x, fps),
+        "distance": horizontal_distance(x),
+        "max_height_after_1s": after.max(axis=1) if after.shape[1] else x[:, -1, 2],
+    }
+
+
+def simple_rules(x_train: np.ndarray, y_train: np.ndarray, x_test: np.ndarray, y_test: np.ndarray, fps: float) -> list[dict]:
+    """:func:`best_threshold_rule` for every feature of :data:`FEATURES`: one row per feature."""
+    f_train, f_test = features(x_train, fps), features(x_test, fps)
+    return [{"feature": name, **best_threshold_rule(f_train[name], y_train, f_test[name], y_test)} for name in FEATURES]

@@ -1,0 +1,476 @@
+"""Trajectory synthesis: light (bouncy) and heavy (sliding) objects thrown onto the ground, in MuJoCo.
+
+The paper (Sec. "Data") animated a launch in Blender over seven key-frames and recorded the object's
+world position once the physics engine took over. We set that take-over state directly: a random
+height, random Euler angles, random linear and angular velocity; recording starts at that instant.
+Each class is a prior over physical parameters (:class:`ClassPrior`); the launch prior is shared, so
+only the object's physics tells the classes apart.
+
+Pipeline: sample parameters and launch states -> one compiled model per object (same size signature)
+-> ``mujoco.rollout`` over all cores -> centre positions sampled at the camera frame rate.
+:func:`simulate_reference` is the same computation as a plain ``mj_step`` loop; tests require the two
+to agree bit for bit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+from tqdm.auto import tqdm
+
+from study import CLASSES, __version__, cache, data
+from study.contact import damping_for_restitution, penetration_bound, restitution_range
+from study.errors import ConfigError, check_range
+from study.scene import Shape, compile_scene
+
+GRAVITY = 9.81
+"""m/s^2, MuJoCo's default |gravity|."""
+STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+@dataclass(frozen=True)
+class ClassPrior:
+    """Prior over one class's physical parameters: each a ``(low, high)`` range, sampled uniformly
+    (mass log-uniformly). Sources for the ranges are given in the book's data chapter."""
+
+    mass: tuple[float, float]
+    """kg, log-uniform."""
+    restitution: tuple[float, float]
+    """Coefficient of restitution of a flat drop on the ground, dimensionless, uniform."""
+    friction: tuple[float, float]
+    """Sliding (Coulomb) friction coefficient against the ground, dimensionless, uniform."""
+
+    def validate(self, where: str) -> None:
+        """Raise :class:`ConfigError` naming the field if a range is empty or out of physical bounds."""
+        for name, (lo_ok, hi_ok) in {"mass": (1e-3, 1e4), "restitution": (0.0, 1.0), "friction": (0.0, 2.0)}.items():
+            lo, hi = getattr(self, name)
+            check_range(f"{where}.{name}[0]", lo, lo_ok, hi_ok, lo_open=name == "mass")
+            check_range(f"{where}.{name}[1]", hi, lo, hi_ok)
+
+
+LIGHT = ClassPrior(mass=(0.05, 0.5), restitution=(0.45, 0.85), friction=(0.3, 0.8))
+"""Light, safe to pass over: a ball, an empty plastic container."""
+HEAVY = ClassPrior(mass=(3.0, 25.0), restitution=(0.1, 0.5), friction=(0.4, 0.7))
+"""Heavy, must avoid: a wooden block, a brick, a gas cylinder."""
+
+
+@dataclass(frozen=True)
+class LaunchPrior:
+    """Prior over the state at the moment recording starts; the same for both classes."""
+
+    height: tuple[float, float] = (0.6, 1.5)
+    """Height of the centre above the ground, metres (a car's boot to a lorry's bed), uniform."""
+    horizontal_speed: tuple[float, float] = (0.0, 4.0)
+    """Speed in the ground plane, m/s, uniform; the direction is uniform on the circle."""
+    vertical_speed: tuple[float, float] = (-1.0, 2.0)
+    """Vertical velocity, m/s (up positive), uniform."""
+    spin: float = 2 * math.pi
+    """Each component of the angular velocity is uniform in [-spin, spin], rad/s."""
+
+    def validate(self, shape: Shape) -> None:
+        """Raise :class:`ConfigError` if a range is empty or the object could start in the ground."""
+        check_range("LaunchPrior.height[0]", self.height[0], shape.bounding_radius, 20.0)
+        check_range("LaunchPrior.height[1]", self.height[1], self.height[0], 20.0)
+        check_range("LaunchPrior.horizontal_speed[0]", self.horizontal_speed[0], 0.0, 30.0)
+        check_range("LaunchPrior.horizontal_speed[1]", self.horizontal_speed[1], self.horizontal_speed[0], 30.0)
+        check_range("LaunchPrior.vertical_speed[0]", self.vertical_speed[0], -30.0, 30.0)
+        check_range("LaunchPrior.vertical_speed[1]", self.vertical_speed[1], self.vertical_speed[0], 30.0)
+        check_range("LaunchPrior.spin", self.spin, 0.0, 100.0)
+
+
+@dataclass(frozen=True)
+class SynthConfig:
+    """Everything that determines a dataset, with the seed. Build one with :meth:`preset`."""
+
+    n_train: int = 1000
+    """Training trajectories per class."""
+    n_test: int = 1000
+    """Test trajectories per class."""
+    duration: float = 10.0
+    """Recorded length of each trajectory, seconds."""
+    fps: float = 30.0
+    """Camera frame rate at which positions are recorded, frames per second."""
+    timestep: float = 1 / 1800
+    """Simulation step, seconds; must divide the frame period (chosen by the convergence check)."""
+    stiffness: float = 2.5e5
+    """Contact stiffness k of MuJoCo's direct solref, 1/s^2 (about 6 ms contacts; see the book)."""
+    air: bool = True
+    """Air drag and added mass through MuJoCo's ellipsoid fluid model (air at 20 C)."""
+    shape: Shape = field(default_factory=Shape)
+    """The object's shape, the same for every trajectory (a 20 cm cube by default)."""
+    light: ClassPrior = LIGHT
+    """Prior of the light (label 0, safe to pass over) class."""
+    heavy: ClassPrior = HEAVY
+    """Prior of the heavy (label 1, must avoid) class."""
+    launch: LaunchPrior = field(default_factory=LaunchPrior)
+    """Prior of the launch state, shared by both classes."""
+
+    @classmethod
+    def preset(cls, name: str) -> SynthConfig:
+        """``'paper'``: the paper's size (1000 train + 1000 test per class, 10 s). ``'smoke'``: tiny."""
+        if name == "paper":
+            return cls()
+        if name == "smoke":
+            return cls(n_train=8, n_test=8, duration=3.0)
+        raise ConfigError(f"unknown preset {name!r}; allowed: 'smoke', 'paper'")
+
+    def replace(self, **changes: Any) -> SynthConfig:
+        """A copy with ``changes`` applied, validated."""
+        cfg = dataclasses.replace(self, **changes)
+        cfg.validate()
+        return cfg
+
+    @property
+    def steps_per_frame(self) -> int:
+        """Simulation steps per recorded frame."""
+        return int(round(1.0 / (self.fps * self.timestep)))
+
+    @property
+    def n_frames(self) -> int:
+        """T, frames per trajectory (the first is the launch state)."""
+        return int(round(self.duration * self.fps))
+
+    def prior(self, label: int | str) -> ClassPrior:
+        """The prior of a class, by label (0, 1) or name ('light', 'heavy')."""
+        if label in (0, "light"):
+            return self.light
+        if label in (1, "heavy"):
+            return self.heavy
+        raise ConfigError(f"unknown class {label!r}; allowed: 0/'light', 1/'heavy'")
+
+    def max_impact_speed(self) -> float:
+        """Bound on the normal speed of any point of the object at impact, m/s (drag ignored)."""
+        vz = max(abs(self.launch.vertical_speed[0]), abs(self.launch.vertical_speed[1]))
+        fall = math.sqrt(vz**2 + 2 * GRAVITY * self.launch.height[1])
+        return fall + math.sqrt(3) * self.launch.spin * self.shape.bounding_radius
+
+    def validate(self) -> None:
+        """Raise :class:`ConfigError` naming the field and its allowed range for any bad value."""
+        for name in ("n_train", "n_test"):
+            v = getattr(self, name)
+            if not isinstance(v, int) or isinstance(v, bool) or not 1 <= v <= 1_000_000:
+                raise ConfigError(f"SynthConfig.{name} = {v!r} must be an integer in [1, 1000000]")
+        check_range("SynthConfig.duration", self.duration, 0.0, 120.0, lo_open=True)
+        check_range("SynthConfig.fps", self.fps, 1.0, 1000.0)
+        check_range("SynthConfig.timestep", self.timestep, 1e-5, 0.01)
+        check_range("SynthConfig.stiffness", self.stiffness, 1e3, 1e7)
+        ratio = 1.0 / (self.fps * self.timestep)
+        if abs(ratio - round(ratio)) > 1e-6:
+            raise ConfigError(
+                f"SynthConfig.timestep = {self.timestep!r} s does not divide the frame period 1/{self.fps:g} s; "
+                f"use 1/(fps * n) for an integer n"
+            )
+        if self.n_frames < 2:
+            raise ConfigError(f"SynthConfig.duration = {self.duration!r} s gives fewer than 2 frames at {self.fps:g} fps")
+        resolution = math.sqrt(self.stiffness) * self.timestep
+        if resolution > 0.3:
+            raise ConfigError(
+                f"sqrt(SynthConfig.stiffness) * SynthConfig.timestep = {resolution:.3f} exceeds 0.3: the contact is "
+                f"under-resolved and can gain energy; lower the timestep or the stiffness"
+            )
+        self.shape.validate("SynthConfig.shape")
+        self.light.validate("SynthConfig.light")
+        self.heavy.validate("SynthConfig.heavy")
+        self.launch.validate(self.shape)
+
+    def validate_calibration(self) -> None:
+        """Raise :class:`ConfigError` if a class asks for a restitution the contact calibration cannot give."""
+        lo, hi = restitution_range(self.shape, self.stiffness, self.timestep)
+        for name in CLASSES:
+            r = self.prior(name).restitution
+            if r[0] < lo or r[1] > hi:
+                raise ConfigError(
+                    f"SynthConfig.{name}.restitution = {r!r} leaves the calibrated range [{lo:.3f}, {hi:.3f}] "
+                    f"for this stiffness and timestep; narrow it"
+                )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able dict (tuples as lists)."""
+        return json_roundtrip(dataclasses.asdict(self))
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> SynthConfig:
+        """Inverse of :meth:`to_dict`; raises :class:`ConfigError` on unknown or missing fields."""
+        try:
+            tup = lambda v: tuple(v) if isinstance(v, list) else v  # noqa: E731
+            return cls(
+                **{k: v for k, v in d.items() if k not in ("shape", "light", "heavy", "launch")},
+                shape=Shape(**{k: tup(v) for k, v in d["shape"].items()}),
+                light=ClassPrior(**{k: tup(v) for k, v in d["light"].items()}),
+                heavy=ClassPrior(**{k: tup(v) for k, v in d["heavy"].items()}),
+                launch=LaunchPrior(**{k: tup(v) for k, v in d["launch"].items()}),
+            )
+        except (KeyError, TypeError) as e:
+            raise ConfigError(f"not a SynthConfig: {e}") from None
+
+
+def json_roundtrip(obj: Any) -> Any:
+    """``obj`` as JSON would give it back (tuples become lists)."""
+    import json
+
+    return json.loads(cache.canonical_json(obj))
+
+
+# --------------------------------------------------------------------------- sampling
+
+
+def sample_objects(prior: ClassPrior, n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """Draw ``n`` objects' parameters: ``mass`` (kg), ``restitution``, ``friction``, each (n,) float64."""
+    log_mass = rng.uniform(math.log(prior.mass[0]), math.log(prior.mass[1]), n)
+    return {
+        "mass": np.exp(log_mass),
+        "restitution": rng.uniform(*prior.restitution, n),
+        "friction": rng.uniform(*prior.friction, n),
+    }
+
+
+def sample_launch(launch: LaunchPrior, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Draw ``n`` launch states: ``qpos`` (n, 7) [x, y, z metres, quaternion w, x, y, z] and
+    ``qvel`` (n, 6) [linear m/s in the world frame, angular rad/s in the body frame]."""
+    qpos = np.zeros((n, 7))
+    qpos[:, 2] = rng.uniform(*launch.height, n)
+    euler = rng.uniform(-math.pi, math.pi, (n, 3))  # random Euler angles, as in the paper
+    for i in range(n):
+        mujoco.mju_euler2Quat(qpos[i, 3:7], euler[i], "xyz")
+    speed = rng.uniform(*launch.horizontal_speed, n)
+    heading = rng.uniform(-math.pi, math.pi, n)
+    qvel = np.zeros((n, 6))
+    qvel[:, 0] = speed * np.cos(heading)
+    qvel[:, 1] = speed * np.sin(heading)
+    qvel[:, 2] = rng.uniform(*launch.vertical_speed, n)
+    qvel[:, 3:6] = rng.uniform(-launch.spin, launch.spin, (n, 3))
+    return qpos, qvel
+
+
+def sample_split(cfg: SynthConfig, seed: int, split: str) -> dict[str, np.ndarray]:
+    """Parameters and launch states of one split, light then heavy, from disjoint seeds.
+
+    Each (split, class) draws from its own stream ``SeedSequence(seed, spawn_key=(split, class))``,
+    so train and test never share random numbers and changing ``n_test`` leaves train unchanged.
+    Returns per-trajectory arrays: label, mass, restitution, friction, damping, qpos0, qvel0.
+    """
+    split_id = data.SPLITS.index(split)
+    n = cfg.n_train if split == "train" else cfg.n_test
+    parts = []
+    for label, name in enumerate(CLASSES):
+        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(split_id, label)))
+        objects = sample_objects(cfg.prior(name), n, rng)
+        qpos, qvel = sample_launch(cfg.launch, n, rng)
+        objects["damping"] = damping_for_restitution(
+            objects["restitution"], cfg.shape, stiffness=cfg.stiffness, timestep=cfg.timestep
+        )
+        parts.append({"label": np.full(n, label, dtype=np.int64), **objects, "qpos0": qpos, "qvel0": qvel})
+    return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+
+
+# --------------------------------------------------------------------------- simulation
+
+
+def build_model(cfg: SynthConfig, mass: float, damping: float, friction: float) -> mujoco.MjModel:
+    """The compiled scene for one object (SI units)."""
+    return compile_scene(
+        cfg.shape, mass=mass, damping=damping, stiffness=cfg.stiffness, friction=friction,
+        timestep=cfg.timestep, air=cfg.air,
+    )
+
+
+def _models(cfg: SynthConfig, params: dict[str, np.ndarray], idx: range) -> list[mujoco.MjModel]:
+    return [build_model(cfg, params["mass"][i], params["damping"][i], params["friction"][i]) for i in idx]
+
+
+def staggered_qvel(qvel: np.ndarray, timestep: float) -> np.ndarray:
+    """The velocity to give MuJoCo so that free flight follows the launch's exact parabola.
+
+    MuJoCo's (semi-implicit Euler) velocity lives half a step before the position: starting it at the
+    launch velocity would trace the parabola of ``v - g dt / 2``, 2.7 mm low after 1 s at our step.
+    Starting it at ``v + g dt / 2`` (the true velocity half a step earlier) removes that offset.
+    ``qvel``: (..., 6), the last axis [linear world m/s, angular body rad/s].
+    """
+    out = np.array(qvel, dtype=float, copy=True)
+    out[..., 2] += GRAVITY * timestep / 2
+    return out
+
+
+def _initial_states(models: list[mujoco.MjModel], qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
+    """(n, nstate) full physics states (time 0) for the launch states."""
+    states = np.empty((len(models), mujoco.mj_stateSize(models[0], STATE)))
+    for i, m in enumerate(models):
+        d = mujoco.MjData(m)
+        d.qpos[:] = qpos[i]
+        d.qvel[:] = staggered_qvel(qvel[i], m.opt.timestep)
+        mujoco.mj_getState(m, d, states[i], STATE)
+    return states
+
+
+def _frames(cfg: SynthConfig, initial: np.ndarray, states: np.ndarray) -> np.ndarray:
+    """Centre positions at the frame times from per-step states: (n, T, 3) float64, metres.
+
+    Frame 0 is the launch state; frame k is the state after ``k * steps_per_frame`` steps.
+    """
+    spf = cfg.steps_per_frame
+    pos = np.empty((states.shape[0], cfg.n_frames, 3))
+    pos[:, 0] = initial[:, 1:4]  # state layout: time, qpos (x, y, z, quat), qvel
+    pos[:, 1:] = states[:, spf - 1 :: spf, 1:4][:, : cfg.n_frames - 1]
+    return pos
+
+
+def _chunks(n: int, size: int) -> Iterator[range]:
+    for start in range(0, n, size):
+        yield range(start, min(n, start + size))
+
+
+def simulate(
+    cfg: SynthConfig,
+    params: dict[str, np.ndarray],
+    *,
+    threads: int | None = None,
+    chunk: int = 32,
+    progress: bool = True,
+    desc: str = "simulating",
+) -> np.ndarray:
+    """Simulate every object from its launch state with ``mujoco.rollout`` on ``threads`` threads.
+
+    ``params`` holds (n,) arrays mass, damping, friction and qpos0 (n, 7), qvel0 (n, 6).
+    Returns (n, T, 3) float64 centre positions, metres. ``threads=None`` uses every core;
+    ``threads=1`` runs the rollout on the calling thread.
+    """
+    n = len(params["mass"])
+    threads = (os.cpu_count() or 1) if threads is None else threads
+    nstep = (cfg.n_frames - 1) * cfg.steps_per_frame
+    out = np.empty((n, cfg.n_frames, 3))
+    with rollout.Rollout(nthread=threads if threads > 1 else 0) as pool, tqdm(
+        total=n, desc=desc, unit="traj", disable=not progress, leave=False
+    ) as bar:
+        for idx in _chunks(n, chunk):
+            models = _models(cfg, params, idx)
+            datas = [mujoco.MjData(models[0]) for _ in range(max(threads, 1))]
+            initial = _initial_states(models, params["qpos0"][idx], params["qvel0"][idx])
+            states, _ = pool.rollout(models, datas, initial, nstep=nstep)
+            out[idx.start : idx.stop] = _frames(cfg, initial, states)
+            bar.update(len(idx))
+    return out
+
+
+def simulate_reference(cfg: SynthConfig, params: dict[str, np.ndarray]) -> np.ndarray:
+    """The same as :func:`simulate`, as a plain Python loop of ``mj_step``: the reference for tests."""
+    n = len(params["mass"])
+    out = np.empty((n, cfg.n_frames, 3))
+    for i in range(n):
+        m = build_model(cfg, params["mass"][i], params["damping"][i], params["friction"][i])
+        d = mujoco.MjData(m)
+        d.qpos[:] = params["qpos0"][i]
+        d.qvel[:] = staggered_qvel(params["qvel0"][i], m.opt.timestep)
+        out[i, 0] = d.qpos[:3]
+        for k in range(1, cfg.n_frames):
+            for _ in range(cfg.steps_per_frame):
+                mujoco.mj_step(m, d)
+            out[i, k] = d.qpos[:3]
+    return out
+
+
+# --------------------------------------------------------------------------- datasets
+
+
+def cache_key(cfg: SynthConfig, seed: int) -> str:
+    """Content key of the dataset ``(cfg, seed)`` makes: config, seed, code and library versions."""
+    return cache.key({"config": cfg.to_dict(), "seed": seed, **provenance()})
+
+
+def provenance() -> dict[str, str]:
+    """Versions that can change the simulated numbers."""
+    return {
+        "study": __version__,
+        "code": cache.source_hash("synth", "contact", "scene"),
+        "mujoco": mujoco.__version__,
+        "numpy": np.__version__,
+    }
+
+
+def generate(cfg: SynthConfig, seed: int = 0, *, threads: int | None = None, progress: bool = True) -> data.Dataset:
+    """Simulate the dataset ``(cfg, seed)`` in memory (no cache). See :func:`dataset` for the cached one."""
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        raise ConfigError(f"seed = {seed!r} must be a non-negative integer")
+    cfg.validate()
+    cfg.validate_calibration()
+    splits = {}
+    for name in data.SPLITS:
+        params = sample_split(cfg, seed, name)
+        x = simulate(cfg, params, threads=threads, progress=progress, desc=f"simulating {name}")
+        if not np.all(np.isfinite(x)):
+            raise RuntimeError("simulation produced non-finite positions")  # a bug, not bad input
+        label = params.pop("label")
+        splits[name] = data.Split(x=x.astype(np.float32), y=label, params=params)
+    meta = {"key": cache_key(cfg, seed), "config": cfg.to_dict(), "seed": seed, "versions": provenance()}
+    return data.Dataset(train=splits["train"], test=splits["test"], fps=cfg.fps, meta=meta)
+
+
+def default_path(cfg: SynthConfig, seed: int, data_dir: str | Path = "data") -> Path:
+    """Where :func:`dataset` keeps ``(cfg, seed)``: ``<data_dir>/synth-<key>.npz``."""
+    return Path(data_dir) / f"synth-{cache_key(cfg, seed)}.npz"
+
+
+def load(path: str | Path) -> data.Dataset:
+    """Read a dataset file and check that its header's config, seed and key agree with each other."""
+    ds = data.load(path)
+    meta = ds.meta
+    try:
+        cfg = SynthConfig.from_dict(meta["config"])
+        key = cache.key({"config": cfg.to_dict(), "seed": meta["seed"], **meta["versions"]})
+    except (KeyError, ConfigError) as e:
+        raise data.DataError(f"dataset {path}: the header lacks a valid config ({e}); regenerate it with `study synth`") from None
+    if key != meta.get("key"):
+        raise data.DataError(f"dataset {path}: its config and seed do not match its key (edited?); regenerate it with `study synth`")
+    if ds.n_frames != cfg.n_frames or len(ds.train) != 2 * cfg.n_train or len(ds.test) != 2 * cfg.n_test:
+        raise data.DataError(f"dataset {path}: array sizes disagree with its config; regenerate it with `study synth`")
+    return ds
+
+
+def dataset(
+    cfg: SynthConfig | str,
+    seed: int = 0,
+    *,
+    data_dir: str | Path = "data",
+    threads: int | None = None,
+    progress: bool = True,
+) -> data.Dataset:
+    """The dataset ``(cfg, seed)``: read from ``data_dir`` if present and valid, else simulated and saved.
+
+    ``cfg`` may be a preset name. A cached file from other code or library versions has another key,
+    so it is never mistaken for this one; a corrupt one is replaced.
+    """
+    if isinstance(cfg, str):
+        cfg = SynthConfig.preset(cfg)
+    path = default_path(cfg, seed, data_dir)
+    if path.exists():
+        try:
+            return load(path)
+        except data.DataError:
+            pass  # corrupt or truncated: simulate again and replace it
+    ds = generate(cfg, seed, threads=threads, progress=progress)
+    data.save(ds, path)
+    return dataclasses.replace(ds, path=path)
+
+
+def generate_to_file(
+    cfg: SynthConfig,
+    seed: int = 0,
+    *,
+    out: str | Path | None = None,
+    data_dir: str | Path = "data",
+    threads: int | None = None,
+    progress: bool = True,
+) -> Path:
+    """Make sure the dataset ``(cfg, seed)`` exists as a file and return its path (``out`` if given)."""
+    if out is None:
+        return dataset(cfg, seed, data_dir=data_dir, threads=threads, progress=progress).path  # type: ignore[return-value]
+    ds = generate(cfg, seed, threads=threads, progress=progress)
+    return data.save(ds, out)
