@@ -264,3 +264,47 @@ def read_truth(path: str | Path) -> dict[str, np.ndarray]:
     """The ground-truth CSV written by :func:`render` as columns {'t', 'x', 'y', 'z', 'u', 'v'}, each (n,) float64."""
     a = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     return {k: a[:, j] for j, k in enumerate("txyzuv")}
+
+
+def synth_model(cfg, params: dict[str, np.ndarray], i: int) -> tuple[mujoco.MjModel, np.ndarray, np.ndarray]:
+    """The compiled scene and MuJoCo initial state (qpos, qvel) of trajectory ``i`` of a synth split.
+
+    ``cfg`` is a ``study.synth.SynthConfig``; ``params`` a split's ``params`` dict (mass, damping,
+    friction, qpos0, qvel0). The velocity is staggered exactly as synthesis does, so the rendered
+    motion is the dataset's trajectory.
+    """
+    from study import synth
+
+    model = synth.build_model(cfg, float(params["mass"][i]), float(params["damping"][i]), float(params["friction"][i]))
+    return model, np.asarray(params["qpos0"][i], float), synth.staggered_qvel(params["qvel0"][i], cfg.timestep)
+
+
+def filmstrip(cfg, params: dict[str, np.ndarray], i: int, times, width: int = 320, height: int = 240,
+              camera: str = "side", shadows: bool = True) -> list[np.ndarray]:
+    """Frames of trajectory ``i`` of a synth split at ``times`` (seconds): a list of (height, width, 3) uint8 RGB."""
+    model, qpos, qvel = synth_model(cfg, params, i)
+    steps = np.round(np.asarray(times, float) / model.opt.timestep).astype(int)
+    if len(steps) == 0 or steps.min() < 0:
+        raise ConfigError(f"times = {list(times)!r}: give one or more times >= 0 s")
+    states = simulate(model, qpos, qvel, int(steps.max()))
+    data = mujoco.MjData(model)
+    renderer = _renderer(model, height, width)
+    renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
+    out = []
+    try:
+        for s in steps:
+            data.qpos[:] = states[s]
+            mujoco.mj_forward(model, data)
+            renderer.update_scene(data, camera=camera)
+            out.append(renderer.render().copy())
+    finally:
+        renderer.close()
+    return out
+
+
+def metres_per_pixel(model: mujoco.MjModel, camera: str, height: int, depth: float) -> float:
+    """Size in metres of one pixel at ``depth`` metres along the view axis, for an image ``height`` pixels high."""
+    cid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
+    if cid < 0:
+        raise ConfigError(f"camera {camera!r} is not in the scene")
+    return float(2 * depth * np.tan(np.deg2rad(model.cam_fovy[cid]) / 2) / height)

@@ -114,6 +114,18 @@ def frames(path: str | Path) -> Iterator[np.ndarray]:
     yield from stream(path)[1]
 
 
+def read_frames(path: str | Path, indices) -> dict[int, np.ndarray]:
+    """The frames at ``indices`` (0-based) of ``path`` as {index: (H, W, 3) uint8 RGB}, decoding in one pass."""
+    want = set(int(i) for i in indices)
+    out: dict[int, np.ndarray] = {}
+    for i, frame in enumerate(frames(path)):
+        if i in want:
+            out[i] = np.ascontiguousarray(frame[:, :, ::-1])
+        if len(out) == len(want):
+            break
+    return out
+
+
 @contextlib.contextmanager
 def atomic_writer(path: str | Path, fps: float, size: tuple[int, int], fourcc: str = "mp4v") -> Iterator[cv2.VideoWriter]:
     """Yield a ``cv2.VideoWriter`` (``size`` = (width, height)) writing to a temporary file renamed onto ``path``.
