@@ -66,7 +66,7 @@ class TrackConfig:
     """Longest run of missing frames filled by interpolation; longer gaps split the trajectory."""
     min_found: int = 8
     """Fewest frames the object must be found in, else :class:`TrackingError`."""
-    search_width: int = 320
+    search_width: int = 160
     """Full-frame (re)acquisition runs on the frame subsampled to at most this width, pixels."""
     static_time: float = 0.5
     """A blob that stays put (within a pixel or two) this long, seconds, is scenery: it is ignored from then on."""
@@ -241,8 +241,12 @@ class _Detector:
         x0, y0, x1, y1 = max(0, box[0]), max(0, box[1]), min(self.W, box[2]), min(self.H, box[3])
         if x1 - x0 < 2 or y1 - y0 < 2:
             return None
-        crop = bgr[y0:y1:k, x0:x1:k] if k > 1 else bgr[y0:y1, x0:x1]
-        m = self.mask(np.ascontiguousarray(crop) if k > 1 else crop, close=False)
+        if k > 1:  # every k-th pixel; cv2.resize (nearest) does it far faster than a strided numpy copy
+            x1, y1 = x0 + max(1, (x1 - x0) // k) * k, y0 + max(1, (y1 - y0) // k) * k
+            crop = cv2.resize(bgr[y0:y1, x0:x1], ((x1 - x0) // k, (y1 - y0) // k), interpolation=cv2.INTER_NEAREST)
+        else:
+            crop = bgr[y0:y1, x0:x1]
+        m = self.mask(crop, close=False)
         if not cv2.countNonZero(m):
             return None
         cands = None
