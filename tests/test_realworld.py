@@ -28,6 +28,7 @@ def rendered_set(tmp_path_factory):
     return realworld.render_set(cfg, 1, 1000, tmp_path_factory.mktemp("rw"), rcfg, progress=False)
 
 
+@pytest.mark.slow  # renders the set (about 5 s), shared with the tests below
 def test_render_set_labels_truth_and_cache(rendered_set, tmp_path):
     assert [v.label for v in rendered_set] == ["light", "heavy"]
     for v in rendered_set:

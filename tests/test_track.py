@@ -282,8 +282,10 @@ def _manifest() -> list[dict]:
 def test_real_clip_ball_found_and_bounces(name):
     traj = track.track_video(REAL / name, track.TrackConfig(color="tennis", progress=False))
     longest = traj.longest()
+    # In the 320x240 clips the ball is out of the picture (not yet thrown, above the top, gone) for
+    # up to half the frames; inside the throw it is measured in nearly every frame.
     assert traj.found_fraction >= (0.95 if name == "tennis_table_drop.mp4" else 0.45), traj.found_fraction
-    assert len(longest.t) >= 40
+    assert len(longest.t) >= 40 and longest.measured.mean() >= 0.9
     assert len(track.bounces(longest)) >= 2  # the height series of one piece shows at least two bounces
 
 
