@@ -97,3 +97,12 @@ def test_untrackable_video_is_a_row_not_a_crash(tmp_path):
     rows = realworld.classify(HeightRangeModel(), [realworld.Video(bad, "light")], progress=False)
     assert rows[0]["error"] and "bad.mp4" in rows[0]["error"]
     assert np.isnan(realworld.per_class_accuracy(rows)["light"])
+
+
+def test_rendered_motion_is_the_datasets_trajectory(smoke_cfg, smoke_dataset):
+    cfg, split = smoke_cfg, smoke_dataset.train
+    model, qpos, qvel = render.synth_model(cfg, split.params, 0)
+    states = render.simulate(model, qpos, qvel, 30 * cfg.steps_per_frame)
+    np.testing.assert_allclose(states[:: cfg.steps_per_frame, :3][:30], split.x[0, :30], atol=1e-6)
+    frames = render.filmstrip(cfg, split.params, 0, [0.0, 0.5], width=64, height=48)
+    assert [f.shape for f in frames] == [(48, 64, 3)] * 2 and frames[0].dtype == np.uint8
