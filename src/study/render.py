@@ -279,14 +279,39 @@ def synth_model(cfg, params: dict[str, np.ndarray], i: int) -> tuple[mujoco.MjMo
     return model, np.asarray(params["qpos0"][i], float), synth.staggered_qvel(params["qvel0"][i], cfg.timestep)
 
 
+def framing_camera(path: np.ndarray, fovy: float = 45.0) -> mujoco.MjvCamera:
+    """A free camera that sees the whole ``path`` ((n, 3) metres) side-on, from slightly above.
+
+    It looks at the middle of the path, across its main horizontal direction of travel, from far
+    enough away that the path's extent fits in the vertical field of view ``fovy`` (degrees).
+    """
+    path = np.asarray(path, float)
+    lo, hi = path.min(axis=0), path.max(axis=0)
+    travel = path[-1, :2] - path[0, :2]
+    heading = np.degrees(np.arctan2(travel[1], travel[0])) if np.linalg.norm(travel) > 1e-3 else 0.0
+    extent = max(float(np.linalg.norm(hi[:2] - lo[:2])), 2.0 * float(hi[2]), 1.0)
+    cam = mujoco.MjvCamera()
+    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+    cam.lookat[:] = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, max(hi[2] / 2, 0.2)]
+    cam.azimuth = heading - 90.0  # look across the direction of travel
+    cam.elevation = -8.0
+    cam.distance = 0.55 * extent / np.tan(np.radians(fovy) / 2)
+    return cam
+
+
 def filmstrip(cfg, params: dict[str, np.ndarray], i: int, times, width: int = 320, height: int = 240,
-              camera: str = "side", shadows: bool = True) -> list[np.ndarray]:
-    """Frames of trajectory ``i`` of a synth split at ``times`` (seconds): a list of (height, width, 3) uint8 RGB."""
+              camera: str = "auto", shadows: bool = True) -> list[np.ndarray]:
+    """Frames of trajectory ``i`` of a synth split at ``times`` (seconds): a list of (height, width, 3) uint8 RGB.
+
+    ``camera``: a camera of the scene by name, or ``"auto"`` for one fixed camera that frames the whole
+    throw (:func:`framing_camera`).
+    """
     model, qpos, qvel = synth_model(cfg, params, i)
     steps = np.round(np.asarray(times, float) / model.opt.timestep).astype(int)
     if len(steps) == 0 or steps.min() < 0:
         raise ConfigError(f"times = {list(times)!r}: give one or more times >= 0 s")
     states = simulate(model, qpos, qvel, int(steps.max()))
+    view = framing_camera(states[: steps.max() + 1, :3]) if camera == "auto" else camera
     data = mujoco.MjData(model)
     renderer = _renderer(model, height, width)
     renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
@@ -295,7 +320,7 @@ def filmstrip(cfg, params: dict[str, np.ndarray], i: int, times, width: int = 32
         for s in steps:
             data.qpos[:] = states[s]
             mujoco.mj_forward(model, data)
-            renderer.update_scene(data, camera=camera)
+            renderer.update_scene(data, camera=view)
             out.append(renderer.render().copy())
     finally:
         renderer.close()

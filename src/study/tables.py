@@ -1,0 +1,36 @@
+"""Tidy rows (lists of dicts) as Markdown tables, for chapters that show them with ``IPython.display.Markdown``."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+Format = str | Callable[[Any], str]
+
+
+def _cell(value: Any, fmt: Format | None) -> str:
+    if fmt is None:
+        return str(value)
+    if callable(fmt):
+        return fmt(value)
+    return format(value, fmt)
+
+
+def markdown(rows: Sequence[Mapping[str, Any]], columns: Mapping[str, str], formats: Mapping[str, Format] | None = None) -> str:
+    """A Markdown table of ``rows``: ``columns`` maps each field to its header, ``formats`` a field to a
+    format spec (``".1%"``) or a function of the value; other fields are shown with ``str``."""
+    formats = formats or {}
+    lines = ["| " + " | ".join(columns.values()) + " |", "|" + "---|" * len(columns)]
+    for r in rows:
+        lines.append("| " + " | ".join(_cell(r[c], formats.get(c)) for c in columns) + " |")
+    return "\n".join(lines)
+
+
+def pct(x: float, digits: int = 1) -> str:
+    """``0.8123`` -> ``'81.2 %'``."""
+    return f"{100 * x:.{digits}f} %"
+
+
+def pct_pm(mean: float, std: float, digits: int = 1) -> str:
+    """Mean and standard deviation of a fraction as ``'81.2 ± 1.3 %'``."""
+    return f"{100 * mean:.{digits}f} ± {100 * std:.{digits}f} %"
