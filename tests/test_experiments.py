@@ -37,6 +37,7 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
         ("z", 0.3, 9), ("z", 0.5, 15), ("xyz", 0.3, 9), ("xyz", 0.5, 15)]
     n_files = len(list((tmp_path / "runs").glob("*.json")))
     assert n_files == 2 + 4 + 2  # the length sweep's 0.5 s runs are the seed runs' (cache hits)
+    assert experiments.n_models(dataclasses.replace(TINY, cells=("peephole",))) == n_files
 
     def no_training(*a, **k):
         raise AssertionError("a cached run was retrained")

@@ -38,12 +38,12 @@ def free_flight_error(cfg: SynthConfig, qpos0: np.ndarray, qvel0: np.ndarray, du
 def restitution_from_drops(cfg: SynthConfig, restitution: float, *, drop: float = 1.0, mass: float = 1.0, bounces: int = 3) -> np.ndarray:
     """Restitutions ``sqrt(h[i+1] / h[i])`` of successive apexes of a flat drop (no air, no spin).
 
-    Heights are of the lowest point above the ground; bounces lower than 2 cm are left out (the
+    Heights are of the lowest point above the ground; bounces lower than 5 mm are left out (the
     contact's 1 mm impedance width and the frame of a nearly resting object dominate there).
     """
     b = float(damping_for_restitution(restitution, cfg.shape, stiffness=cfg.stiffness, timestep=cfg.timestep))
     h = drop_test(cfg.shape, b, stiffness=cfg.stiffness, timestep=cfg.timestep, drop=drop, mass=mass, bounces=bounces)
-    h = h[h >= 0.02]
+    h = h[h >= 0.005]
     return np.sqrt(h[1:] / h[:-1])
 
 

@@ -63,18 +63,41 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
         "book",
         help="execute the chapters with papermill and build the HTML book",
         description=(
-            "Execute each chapter of book/ (jupytext MyST sources) with papermill, injecting the "
-            "preset, into executed copies under _build/executed, then build the Jupyter Book to "
-            "_build/html with execution off, failing on warnings. A chapter re-executes only when "
-            "its source, its parameters, the study package or its inputs changed."
+            "Execute each chapter listed in _toc.yml (jupytext MyST sources in book/) with papermill, "
+            "injecting the preset into its 'parameters' cell, into executed copies under "
+            "_build/executed/book/; then build the Jupyter Book from those copies into _build/html "
+            "with execution off and every warning an error. A chapter re-executes only when its "
+            "source, the preset, the study package, or a file or folder named by one of its string "
+            "parameters changed. A failing cell stops the run with one line naming the chapter and "
+            "cell; its partial copy is kept in _build/failed/. Per-chapter times are written to "
+            "_build/executed/timings.json. Prints the path of index.html."
         ),
     )
-    p.add_argument("--preset", choices=["smoke", "paper"], default="paper", help="chapter preset (default: %(default)s)")
+    p.add_argument(
+        "--preset",
+        choices=["smoke", "paper"],
+        default="paper",
+        help="injected as the chapters' 'preset' parameter: 'paper' = the paper's scale; 'smoke' = "
+        "tiny runs, for tests (default: %(default)s)",
+    )
     p.add_argument("--force", action="store_true", help="re-execute every chapter even if its cached copy is current")
-    p.add_argument("--only", metavar="CHAPTER", action="append", default=None,
-                   help="execute only this chapter (by file stem, e.g. 'data'); repeatable; the book is still built")
-    p.add_argument("--root", type=Path, default=Path("."), help="project root holding _config.yml, _toc.yml, book/ (default: .)")
-    p.add_argument("--no-build", action="store_true", help="execute chapters but skip jupyter-book build")
+    p.add_argument(
+        "--only",
+        metavar="CHAPTER",
+        action="append",
+        default=None,
+        help="re-execute this chapter (by file stem, e.g. 'data'), even if cached; repeatable. The other "
+        "chapters keep their executed copies, even out-of-date ones, except that a chapter with no "
+        "copy at all is executed; the whole book is still built",
+    )
+    p.add_argument(
+        "--root",
+        type=Path,
+        default=Path("."),
+        help="project root holding _config.yml, _toc.yml and book/; chapters run with it as their "
+        "working folder (default: .)",
+    )
+    p.add_argument("--no-build", action="store_true", help="execute the chapters but skip the jupyter-book build")
 
     def run(a: argparse.Namespace) -> int:
         from study import book
@@ -137,6 +160,53 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
+def _add_track(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "track",
+        help="track a coloured object through a video and write its trajectory",
+        description=(
+            "Follow an object of one colour through VIDEO (streamed frame by frame): an HSV mask, "
+            "the most plausible blob per frame, gaps of up to --max-gap frames filled by linear "
+            "interpolation, longer gaps splitting the trajectory. Prints one line: frames found, "
+            "filled and missing, and the pieces. Heights are in pixels above the lowest position "
+            "unless --object-size or --metres-per-pixel gives a scale."
+        ),
+    )
+    p.add_argument("video", type=Path, help="the video file (.mp4, .avi, ... anything OpenCV decodes)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--color", default="tennis", help="HSV preset: tennis, orange, red, green, blue (default: %(default)s)")
+    g.add_argument("--hsv", type=float, nargs=6, metavar=("H", "S", "V", "H", "S", "V"),
+                   help="explicit HSV range, low then high, OpenCV scale (H 0-179, S and V 0-255); "
+                   "a low H above the high H wraps through red")
+    p.add_argument("--out", type=Path, default=None,
+                   help="write the trajectory CSV here (frame, t_s, u_px, v_px, height, status, segment, confidence)")
+    p.add_argument("--overlay", type=Path, default=None, help="write a copy of the video with the track drawn (.mp4)")
+    p.add_argument("--max-gap", type=int, default=6, help="longest run of missing frames to interpolate (default: %(default)s)")
+    p.add_argument("--min-found", type=int, default=8, help="fewest frames the object must be found in (default: %(default)s)")
+    p.add_argument("--object-size", type=float, default=None, help="the object's diameter in metres (tennis ball 0.067): heights in metres")
+    p.add_argument("--metres-per-pixel", type=float, default=None, help="image scale at the object's distance: heights in metres")
+    p.add_argument("--ground-v", type=float, default=None, help="image row of the object's centre on the ground (default: its lowest position)")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+    def run(a: argparse.Namespace) -> int:
+        from study import track
+
+        cfg = track.TrackConfig(color=a.color, hsv=tuple(a.hsv) if a.hsv else None, max_gap=a.max_gap,
+                                min_found=a.min_found, progress=not a.no_progress)
+        traj = track.track_video(a.video, cfg, ground_v=a.ground_v, object_size=a.object_size,
+                                 metres_per_pixel=a.metres_per_pixel)
+        if a.out:
+            track.write_csv(traj, a.out)
+        if a.overlay:
+            track.write_overlay(traj, a.overlay, progress=not a.no_progress)
+        pieces = ", ".join(f"{s.t[0]:.2f}-{s.t[-1]:.2f} s" for s in traj.segments())
+        print(f"{a.video}: found in {int(traj.measured.sum())} of {len(traj.t)} frames, "
+              f"{int(traj.filled.sum())} filled, {len(traj.segments())} piece(s): {pieces}")
+        return 0
+
+    p.set_defaults(run=run)
+
+
 def _add_evaluate(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "evaluate",
@@ -165,7 +235,65 @@ def _add_evaluate(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_synth, _add_book, _add_train, _add_evaluate]
+def _add_classify(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "classify",
+        help="say whether a tracked object is light (bouncy) or heavy (sliding)",
+        description=(
+            "Classify one throw with a trained model (a directory written by the training step). "
+            "INPUT is a video (tracked first, as 'study track' does) or a trajectory CSV from "
+            "'study track --out'. The longest piece of the track is resampled to the model's frame "
+            "rate and cut or zero-padded to its input length; a single camera gives only the height, "
+            "so x and y are zero. Prints the class and its probability."
+        ),
+    )
+    p.add_argument("input", type=Path, metavar="VIDEO_OR_CSV", help="a video, or a trajectory CSV from 'study track --out'")
+    p.add_argument("--model", type=Path, required=True, help="trained model directory")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--color", default="tennis", help="HSV preset for a video input (default: %(default)s)")
+    g.add_argument("--hsv", type=float, nargs=6, metavar=("H", "S", "V", "H", "S", "V"), help="explicit HSV range for a video input")
+    p.add_argument("--object-size", type=float, default=0.067,
+                   help="the object's diameter in metres, for the pixel->metre scale (default: %(default)s, a tennis ball)")
+    p.add_argument("--metres-per-pixel", type=float, default=None, help="image scale, overrides --object-size")
+    p.add_argument("--rest-height", type=float, default=None,
+                   help="height of the object's centre at rest, metres (default: half of --object-size)")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+    def run(a: argparse.Namespace) -> int:
+        from study import CLASSES, track, train
+        from study.errors import ConfigError, ModelError
+
+        tm = train.load(a.model)
+        if tm.dims != "z":
+            raise ModelError(
+                f"model {a.model} was trained on {tm.dims!r}; one camera gives only the height: "
+                "use a model trained on 'z' (the paper's real-world test does)"
+            )
+        if a.input.suffix.lower() == ".csv":
+            traj = track.read_csv(a.input)
+            if a.metres_per_pixel is not None:
+                traj = track.calibrate(traj, ground_v=traj.ground_v, metres_per_pixel=a.metres_per_pixel)
+            elif traj.units != "m":
+                raise ConfigError(
+                    f"trajectory CSV {a.input}: heights are in pixels; give --metres-per-pixel, or re-track "
+                    "the video with --object-size, so the model sees metres"
+                )
+        else:
+            cfg = track.TrackConfig(color=a.color, hsv=tuple(a.hsv) if a.hsv else None, progress=not a.no_progress)
+            traj = track.track_video(a.input, cfg, object_size=a.object_size, metres_per_pixel=a.metres_per_pixel)
+        rest = a.object_size / 2 if a.rest_height is None else a.rest_height
+        x = track.to_model_input(traj, tm.fps, tm.n_frames, rest_height=rest)
+        p_cls = tm.predict_proba(x[None])[0]
+        k = int(p_cls.argmax())
+        print(f"{a.input}: {CLASSES[k]} (p = {float(p_cls[k]):.3f})")
+        return 0
+
+    p.set_defaults(run=run)
+
+
+COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
+    _add_synth, _add_book, _add_train, _add_evaluate, _add_track, _add_classify,
+]
 
 
 def build_parser() -> argparse.ArgumentParser:

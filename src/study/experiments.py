@@ -90,8 +90,8 @@ PRESETS: dict[str, Preset] = {
         seeds=(0, 1), lengths=(0.5, 1.0, 1.5), length_seeds=(0, 1), max_epochs=3, patience=2,
     ),
     # The real thing, at the issue's minimum: a 2x2x2x2 grid on Z at 3 s (90 frames); 5 seeds for Z
-    # and XYZ; 8 lengths x 3 seeds x 2 dims; the ablation's 2 other cells x 5 seeds: 78 models, 72
-    # after cache sharing. Measured on the 2-core machine (one thread per run, 1600 + 400 sequences
+    # and XYZ; 8 lengths x 3 seeds x 2 dims; the ablation's 2 other cells x 5 seeds: 78 trained models
+    # (n_models). Measured on the 2-core machine (one thread per run, 1600 + 400 sequences
     # of 90 frames): 2-7 s per epoch, and on this data Z needs 15-25 epochs to converge.
     "paper": Preset(
         name="paper", length=3.0, lrs=(1e-3, 3e-3), truncations=(30, 90), dropouts=(0.2, 0.5),
@@ -228,8 +228,11 @@ def summarise(rows: list[dict], by: tuple[str, ...], value: str = "accuracy") ->
 
 
 def n_models(p: Preset) -> int:
-    """How many models a full run of the preset trains (before cache sharing between experiments)."""
-    return p.n_grid + 2 * len(p.seeds) + 2 * len(p.lengths) * len(p.length_seeds) + (len(p.cells) - 1) * len(p.seeds)
+    """How many models a full run of the preset trains: the length sweep's runs at ``p.length`` with a
+    seed of ``p.seeds`` are the seed runs' (the same config, so the same cache entry)."""
+    shared = 2 * len(set(p.length_seeds) & set(p.seeds)) if p.length in p.lengths else 0
+    sweep = 2 * len(p.lengths) * len(p.length_seeds) - shared
+    return p.n_grid + 2 * len(p.seeds) + sweep + (len(p.cells) - 1) * len(p.seeds)
 
 
 def long_input_effect(summary: list[dict], dims: str) -> dict[str, Any]:

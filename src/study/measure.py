@@ -77,3 +77,30 @@ def best_threshold_rule(f_train: np.ndarray, y_train: np.ndarray, f_test: np.nda
     acc, t, direction = best
     pred = f_test > t if direction == ">" else f_test <= t
     return {"threshold": t, "direction": direction, "train_accuracy": acc, "test_accuracy": float(np.mean(pred == (y_test == 1)))}
+
+
+FEATURES = {
+    "bounces": "number of bounces (rises of 2 cm or more)",
+    "time_to_rest": "time until the object stops, s",
+    "distance": "distance travelled in the ground plane, m",
+    "max_height_after_1s": "highest point after the first second, m",
+}
+"""The one-number summaries a simple rule could threshold, with their meaning and unit."""
+
+
+def features(x: np.ndarray, fps: float) -> dict[str, np.ndarray]:
+    """Each of :data:`FEATURES` for every trajectory of ``x`` (n, T, 3) metres: name -> (n,) array."""
+    x = np.asarray(x, dtype=float)
+    after = x[:, int(round(fps)) :, 2]
+    return {
+        "bounces": bounce_count(x[:, :, 2]).astype(float),
+        "time_to_rest": time_to_rest(x, fps),
+        "distance": horizontal_distance(x),
+        "max_height_after_1s": after.max(axis=1) if after.shape[1] else x[:, -1, 2],
+    }
+
+
+def simple_rules(x_train: np.ndarray, y_train: np.ndarray, x_test: np.ndarray, y_test: np.ndarray, fps: float) -> list[dict]:
+    """:func:`best_threshold_rule` for every feature of :data:`FEATURES`: one row per feature."""
+    f_train, f_test = features(x_train, fps), features(x_test, fps)
+    return [{"feature": name, **best_threshold_rule(f_train[name], y_train, f_test[name], y_test)} for name in FEATURES]

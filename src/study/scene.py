@@ -94,11 +94,12 @@ def scene_xml(
     if not contact:
         flags.append('contact="disable"')
     flag = f"<flag {' '.join(flags)}/>" if flags else ""
+    condim = 3 if friction > 0 else 1  # a zero-width friction pyramid is degenerate: drop friction instead
     r, g, b, a = rgba
     # priority="1" makes the object's solref, solimp and friction the contact's own: no mixing with the floor's.
     return f"""<mujoco model="throw">
   <option timestep="{timestep!r}" integrator="implicitfast" density="{density}" viscosity="{viscosity}">{flag}</option>
-  <visual><global offwidth="1920" offheight="1080"/><quality shadowsize="4096"/></visual>
+  <visual><global offwidth="1920" offheight="1080"/><quality shadowsize="2048"/></visual>
   <asset>
     <texture name="ground" type="2d" builtin="checker" rgb1="0.32 0.32 0.33" rgb2="0.36 0.36 0.37" width="512" height="512" mark="edge" markrgb="0.9 0.9 0.85"/>
     <material name="ground" texture="ground" texrepeat="8 8" reflectance="0.05"/>
@@ -107,13 +108,13 @@ def scene_xml(
   <worldbody>
     <light name="sun" pos="0 0 6" dir="0 0 -1" directional="true" diffuse="0.8 0.8 0.8"/>
     <geom name="ground" type="plane" size="0 0 1" material="ground"/>
-    <camera name="side" pos="0 -6 1.2" xyaxes="1 0 0 0 0.2 1" fovy="45"/>
+    <camera name="side" pos="0 -4 0.6" xyaxes="1 0 0 0 0.1 1" fovy="45"/>
     <camera name="follow" mode="trackcom" pos="0 -3 1" xyaxes="1 0 0 0 0.3 1"/>
     <body name="object" pos="0 0 1">
       <freejoint name="object"/>
       <geom name="object" type="{shape.kind}" size="{size}" mass="{mass!r}" priority="1"
             solref="{-stiffness!r} {-damping!r}" solimp="0.95 0.99 0.001 0.5 2"
-            friction="{friction!r} 0.005 0.0001" condim="3" fluidshape="ellipsoid" rgba="{r} {g} {b} {a}"/>
+            friction="{friction!r} 0.005 0.0001" condim="{condim}" fluidshape="ellipsoid" rgba="{r} {g} {b} {a}"/>
     </body>
   </worldbody>
 </mujoco>"""

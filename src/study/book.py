@@ -1,0 +1,458 @@
+"""Build the book: execute each chapter with papermill (cached by content), then render with Jupyter Book.
+
+A chapter is a jupytext MyST markdown file ``book/<stem>.md`` listed in ``_toc.yml``. It is executed
+with the preset injected into its ``parameters`` cell, into ``_build/executed/book/<stem>.ipynb``;
+``jupyter-book build`` then renders those executed copies with execution off, failing on warnings.
+
+An executed copy is reused while its key is unchanged: the key hashes the chapter's source, the
+injected parameters, the ``study`` package's source, and every file or folder that a string parameter
+of the chapter names (so a new dataset re-executes the chapters that read it). Copies are written
+atomically; a chapter that fails leaves its partial copy in ``_build/failed/`` for inspection, never
+where a complete one is read. A markdown page without a kernel (e.g. the references) is copied as is.
+"""
+
+from __future__ import annotations
+
+import ast
+import contextlib
+import hashlib
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+from tqdm import tqdm
+
+import study
+from study.cache import canonical_json, key, source_hash, write_text_atomic
+from study.errors import ChapterError, ConfigError
+
+EXECUTED = Path("_build/executed")
+"""Where executed copies (and the staged book sources) go, relative to the root."""
+FAILED = Path("_build/failed")
+"""Where the partial copy of a chapter that failed is kept for inspection."""
+RUNNING = Path("_build/running")
+"""Where papermill writes while a chapter runs (never read as complete)."""
+STAGED = ("_config.yml", "_toc.yml")
+"""Root files the Jupyter Book build needs beside the executed chapters."""
+STAGED_IF_PRESENT = ("references.bib",)
+KERNEL = "python3"
+
+
+@dataclass(frozen=True)
+class Chapter:
+    """One entry of the table of contents."""
+
+    entry: str  # as written in _toc.yml, e.g. "book/data"
+    root: Path
+
+    @property
+    def stem(self) -> str:
+        return Path(self.entry).name
+
+    @property
+    def source(self) -> Path:
+        return self.root / f"{self.entry}.md"
+
+    @property
+    def executed(self) -> Path:
+        return self.root / EXECUTED / f"{self.entry}.ipynb"
+
+    @property
+    def key_file(self) -> Path:
+        return self.root / EXECUTED / f"{self.entry}.key.json"
+
+    @property
+    def failed(self) -> Path:
+        return self.root / FAILED / f"{self.entry}.ipynb"
+
+
+# ---------------------------------------------------------------------------------------------
+# The table of contents
+
+
+def _toc_files(node: Any) -> Iterator[str]:
+    """Every ``file:`` of a sphinx-external-toc tree, in reading order."""
+    if isinstance(node, dict):
+        if "file" in node:
+            yield str(node["file"])
+        for k in ("parts", "chapters", "sections"):
+            for child in node.get(k) or []:
+                yield from _toc_files(child)
+    elif isinstance(node, list):
+        for child in node:
+            yield from _toc_files(child)
+
+
+def chapters(root: Path) -> list[Chapter]:
+    """The chapters listed in ``<root>/_toc.yml`` (its ``root`` first), in order.
+
+    Raises :class:`ConfigError` if the toc is missing or malformed, names a file that does not exist,
+    or two chapters share a stem.
+    """
+    toc_path = root / "_toc.yml"
+    if not toc_path.is_file():
+        raise ConfigError(f"{toc_path}: no table of contents; run 'study book' from the project root or pass --root")
+    try:
+        toc = yaml.safe_load(toc_path.read_text())
+    except yaml.YAMLError as e:
+        raise ConfigError(f"{toc_path}: not valid YAML ({e}); fix the file") from e
+    if not isinstance(toc, dict) or "root" not in toc:
+        raise ConfigError(f"{toc_path}: needs 'format: jb-book' and a 'root:' entry (e.g. 'root: book/intro')")
+    entries = [str(toc["root"]), *_toc_files({k: v for k, v in toc.items() if k != "root"})]
+    result, seen = [], {}
+    for entry in entries:
+        entry = entry.removesuffix(".md")
+        ch = Chapter(entry, root)
+        if not ch.source.is_file():
+            raise ConfigError(f"{toc_path} lists '{entry}' but {ch.source} does not exist; add the file or remove the entry")
+        if ch.stem in seen:
+            raise ConfigError(f"{toc_path}: '{entry}' and '{seen[ch.stem]}' share the name '{ch.stem}'; rename one")
+        seen[ch.stem] = entry
+        result.append(ch)
+    return result
+
+
+# ---------------------------------------------------------------------------------------------
+# Cache keys
+
+
+def _read_notebook(path: Path) -> Any:
+    """The chapter's jupytext source as an nbformat notebook."""
+    import jupytext
+
+    return jupytext.read(path, fmt="md:myst")
+
+
+def _is_notebook(nb: Any) -> bool:
+    """A page with a kernelspec in its header is executed; a plain markdown page is copied."""
+    return "kernelspec" in nb.metadata
+
+
+def notebook_parameters(nb_path: Path, injected: dict[str, Any]) -> dict[str, Any]:
+    """The parameters a run of the notebook at ``nb_path`` (.ipynb) sees: defaults updated by ``injected``.
+
+    Defaults that are not Python literals (expressions) are left out: they cannot name an input.
+    """
+    import papermill
+
+    values: dict[str, Any] = {}
+    for name, info in papermill.inspect_notebook(str(nb_path)).items():
+        with contextlib.suppress(ValueError, SyntaxError, TypeError):
+            values[name] = ast.literal_eval(info["default"])
+    values.update(injected)
+    return values
+
+
+def _fingerprint_path(p: Path) -> list[Any]:
+    """A file: its size and SHA-256. A folder: every file inside by relative name, size and mtime.
+
+    Hidden files are left out: they include the temporary files of atomic writes still in progress.
+    """
+    if p.is_file():
+        return ["file", p.stat().st_size, hashlib.sha256(p.read_bytes()).hexdigest()]
+    files = []
+    for f in sorted(p.rglob("*")):
+        rel = f.relative_to(p)
+        if f.is_file() and not any(part.startswith(".") for part in rel.parts):
+            st = f.stat()
+            files.append([rel.as_posix(), st.st_size, st.st_mtime_ns])
+    return ["dir", files]
+
+
+def inputs_fingerprint(root: Path, parameters: dict[str, Any]) -> dict[str, Any]:
+    """For each string parameter that names an existing file or folder (relative to ``root``), its fingerprint."""
+    out: dict[str, Any] = {}
+    here = root.resolve()
+    for name, value in sorted(parameters.items()):
+        if not isinstance(value, str) or not value.strip():
+            continue
+        try:
+            p = (root / value).resolve()
+            if here.is_relative_to(p) or not p.exists():
+                continue  # the project itself or a folder above it is not an input
+        except (OSError, ValueError):
+            continue
+        out[name] = [value, _fingerprint_path(p)]
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Execution
+
+
+@contextlib.contextmanager
+def _kernel_environment() -> Iterator[None]:
+    """Environment the kernel inherits: headless MuJoCo, fixed hash seed, and this very ``study``."""
+    saved = dict(os.environ)
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    os.environ["PYTHONHASHSEED"] = "0"
+    # The kernel must import the same package whose source the cache key hashed.
+    src = str(Path(study.__file__).resolve().parent.parent)
+    path = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+    os.environ["PYTHONPATH"] = os.pathsep.join([src, *[p for p in path if p != src]])
+    try:
+        yield
+    finally:
+        os.environ.clear()
+        os.environ.update(saved)
+
+
+_FENCE = re.compile(r"^(`{3,}|~{3,})\{code-cell\}")
+
+
+def _source_line(source: Path, code_ordinal: int) -> int | None:
+    """1-based line in the MyST file of the first source line of its ``code_ordinal``-th code cell."""
+    lines = source.read_text().splitlines()
+    fences = [i for i, line in enumerate(lines) if _FENCE.match(line)]
+    if code_ordinal >= len(fences):
+        return None
+    i = fences[code_ordinal] + 1
+    if i < len(lines) and lines[i].strip() == "---":  # YAML options block
+        i += 1
+        while i < len(lines) and lines[i].strip() != "---":
+            i += 1
+        i += 1
+    while i < len(lines) and lines[i].startswith(":") and ":" in lines[i][1:]:  # short options
+        i += 1
+    while i < len(lines) and not lines[i].strip():
+        i += 1
+    return i + 1
+
+
+def _failure_message(ch: Chapter, err: Any, nb: Any, root: Path) -> str:
+    """One sentence naming the chapter, the cell, the exception and where the partial copy is."""
+    from papermill.exceptions import PapermillExecutionError
+
+    rel_src = ch.source.relative_to(root)
+    rel_failed = ch.failed.relative_to(root)
+    if not isinstance(err, PapermillExecutionError):
+        return f"chapter {rel_src} failed: {type(err).__name__}: {err}; the partial copy is in {rel_failed}"
+    # papermill injects a cell after the `parameters` cell (at the top if there is none); the source
+    # has no such cell, so indices past it shift by one.
+    tagged = [i for i, c in enumerate(nb.cells) if "parameters" in c.get("metadata", {}).get("tags", [])]
+    p = tagged[0] if tagged else -1
+    index = err.cell_index if err.cell_index <= p else err.cell_index - 1
+    code_ordinal = sum(1 for c in nb.cells[:index] if c.cell_type == "code")
+    first = next((s for s in str(err.source).splitlines() if s.strip()), "").strip()
+    line = _source_line(ch.source, code_ordinal)
+    where = f"{rel_src}:{line}" if line else str(rel_src)
+    evalue = " ".join(str(err.evalue).split())
+    return (
+        f"chapter {rel_src} failed in cell {index} ({where}: `{first}`): {err.ename}: {evalue}; "
+        f"the partial executed copy is in {rel_failed}"
+    )
+
+
+def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], root: Path) -> None:
+    """Run ``source_nb`` (the chapter ``nb`` as .ipynb) with papermill into its executed copy, atomically.
+
+    Raises :class:`ChapterError` if a cell fails or the kernel dies; the partial copy goes to
+    ``_build/failed/`` and any older executed copy of the chapter is removed.
+    """
+    import papermill
+    from nbclient.exceptions import DeadKernelError
+    from papermill.exceptions import PapermillExecutionError
+
+    running = root / RUNNING / f"{ch.entry}.ipynb"
+    running.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        with _kernel_environment():
+            papermill.execute_notebook(
+                str(source_nb),
+                str(running),
+                parameters=parameters,
+                kernel_name=KERNEL,
+                cwd=str(root),
+                progress_bar=sys.stderr.isatty(),
+                log_output=False,
+                # The kernel's own log (not the cells' output) only warns that its local TCP link is
+                # unencrypted; errors still show.
+                extra_arguments=["--IPKernelApp.log_level=ERROR"],
+            )
+    except (PapermillExecutionError, DeadKernelError) as e:
+        ch.executed.unlink(missing_ok=True)
+        ch.key_file.unlink(missing_ok=True)
+        ch.failed.parent.mkdir(parents=True, exist_ok=True)
+        if running.exists():
+            os.replace(running, ch.failed)
+        raise ChapterError(_failure_message(ch, e, nb, root)) from None
+    except BaseException:
+        running.unlink(missing_ok=True)
+        raise
+    ch.executed.parent.mkdir(parents=True, exist_ok=True)
+    os.replace(running, ch.executed)  # same filesystem: the complete copy appears in one step
+    ch.failed.unlink(missing_ok=True)
+
+
+def _write_key(ch: Chapter, base: dict[str, Any], parameters: dict[str, Any], root: Path, seconds: float) -> None:
+    """Record the key the executed copy answers to (inputs fingerprinted as they are now)."""
+    k = key({**base, "inputs": inputs_fingerprint(root, parameters)}, length=64)
+    write_text_atomic(ch.key_file, json.dumps({"key": k, "seconds": round(seconds, 3)}, indent=1) + "\n")
+
+
+def _stored(ch: Chapter) -> dict[str, Any] | None:
+    if not ch.executed.is_file() or not ch.key_file.is_file():
+        return None
+    try:
+        return json.loads(ch.key_file.read_text())
+    except (json.JSONDecodeError, OSError):
+        return None
+
+
+# ---------------------------------------------------------------------------------------------
+# The whole build
+
+
+def _decide(ch: Chapter, current: str, force: bool, only: list[str] | None) -> tuple[str, dict[str, Any]]:
+    """``("cached" | "kept" | "execute", stored key record)`` for one chapter."""
+    stored = _stored(ch) or {}
+    if force or (only is not None and ch.stem in only):
+        return "execute", stored
+    if stored.get("key") == current:
+        return "cached", stored
+    if only is not None and ch.executed.is_file():
+        return "kept", stored  # out of date, but the user asked for other chapters only
+    return "execute", stored
+
+
+def execute(root: Path, preset: str, force: bool = False, only: list[str] | None = None) -> dict[str, dict[str, Any]]:
+    """Execute (or reuse) every chapter of ``root``'s book; returns {stem: {"seconds", "cached", ...}}.
+
+    ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, keeping the others'
+    current copies, but a chapter that has no executed copy at all is always executed. Stops at the
+    first failing chapter with :class:`ChapterError`. Also writes ``_build/executed/timings.json``.
+    """
+    import nbformat
+
+    root = Path(root).resolve()
+    chs = chapters(root)
+    stems = [c.stem for c in chs]
+    unknown = [s for s in only or [] if s not in stems]
+    if unknown:
+        raise ConfigError(f"--only {', '.join(unknown)}: no such chapter; the chapters are: {', '.join(stems)}")
+    injected = {"preset": preset}
+    package = source_hash()
+    timings: dict[str, dict[str, Any]] = {}
+    done: list[tuple[Chapter, dict[str, Any], dict[str, Any], float]] = []
+    bar = tqdm(chs, desc="chapters", unit="chapter", file=sys.stderr, dynamic_ncols=True)
+    try:
+        with tempfile.TemporaryDirectory(prefix="study-book-") as tmp:
+            for ch in bar:
+                bar.set_postfix_str(ch.stem)
+                nb = _read_notebook(ch.source)
+                if not _is_notebook(nb):  # a plain page: placed, never executed
+                    _copy_if_changed(ch.source, root / EXECUTED / f"{ch.entry}.md")
+                    timings[ch.stem] = {"seconds": 0.0, "cached": True, "page": True}
+                    continue
+                probe = Path(tmp) / f"{ch.stem}.ipynb"
+                nbformat.write(nb, probe)
+                parameters = notebook_parameters(probe, injected)
+                base = {
+                    "chapter": hashlib.sha256(ch.source.read_bytes()).hexdigest(),
+                    "injected": canonical_json(injected),
+                    "package": package,
+                    "kernel": KERNEL,
+                }
+                current = key({**base, "inputs": inputs_fingerprint(root, parameters)}, length=64)
+                action, stored = _decide(ch, current, force, only)
+                if action != "execute":
+                    seconds = stored.get("seconds", 0.0)
+                    timings[ch.stem] = {"seconds": seconds, "cached": True, **({"stale": True} if action == "kept" else {})}
+                    note = f"executed earlier in {seconds:.1f} s" if action == "cached" else "out of date; not in --only"
+                    tqdm.write(f"{ch.stem}: {action} ({note})", file=sys.stderr)
+                    continue
+                t0 = time.perf_counter()
+                try:
+                    _execute(ch, probe, nb, injected, root)
+                except ChapterError:
+                    timings[ch.stem] = {"seconds": round(time.perf_counter() - t0, 3), "cached": False, "failed": True}
+                    raise
+                seconds = time.perf_counter() - t0
+                done.append((ch, base, parameters, seconds))
+                timings[ch.stem] = {"seconds": round(seconds, 3), "cached": False}
+                tqdm.write(f"{ch.stem}: executed in {seconds:.1f} s", file=sys.stderr)
+    finally:
+        bar.close()
+        # Keys last, once every chapter of this run has written what it writes: a chapter whose
+        # input folder a later chapter adds to is not re-executed next time for that reason alone.
+        for ch, base, parameters, seconds in done:
+            _write_key(ch, base, parameters, root, seconds)
+        if timings:
+            record = {"preset": preset, "chapters": timings}
+            write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
+    return timings
+
+
+def _stage(root: Path) -> Path:
+    """Copy the files the Jupyter Book build reads beside the executed chapters; returns that folder."""
+    out = root / EXECUTED
+    for name in STAGED:
+        src = root / name
+        if not src.is_file():
+            raise ConfigError(f"{src}: missing; the book needs it to build")
+        _copy_if_changed(src, out / name)
+    for name in STAGED_IF_PRESENT:
+        if (root / name).is_file():
+            _copy_if_changed(root / name, out / name)
+    book = root / "book"
+    for src in sorted(p for p in book.rglob("*") if p.is_file()) if book.is_dir() else []:
+        rel = src.relative_to(root)
+        if src.suffix == ".md" or ".ipynb_checkpoints" in rel.parts or "__pycache__" in rel.parts:
+            continue  # chapters and pages are placed by execute()
+        _copy_if_changed(src, out / rel)
+    return out
+
+
+def _copy_if_changed(src: Path, dst: Path) -> None:
+    if dst.is_file() and dst.read_bytes() == src.read_bytes():
+        return  # keep the old mtime
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copy2(src, dst)
+
+
+def _jupyter_book() -> list[str]:
+    exe = Path(sys.executable).parent / "jupyter-book"
+    return [str(exe)] if exe.is_file() else [sys.executable, "-m", "jupyter_book"]
+
+
+def render(root: Path) -> Path:
+    """Render the executed book to ``<root>/_build/html`` (execution off, warnings are errors)."""
+    root = Path(root).resolve()
+    src = _stage(root)
+    # --all: a page left unchanged would otherwise not repeat its warnings, and -W would pass.
+    cmd = [*_jupyter_book(), "build", str(src), "--path-output", str(root), "--all", "-W", "-n", "--keep-going", "-q"]
+    sys.stderr.flush()
+    proc = subprocess.run(cmd, cwd=root, stdout=2)  # its log to stderr: stdout is left for the index path
+    if proc.returncode != 0:
+        raise ChapterError(
+            f"jupyter-book build failed (exit {proc.returncode}) on {src.relative_to(root)}; "
+            "see the warnings above (every warning is an error)"
+        )
+    return root / "_build" / "html"
+
+
+def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bool) -> None:
+    """Execute the chapters of the book at ``root`` with ``preset`` (cached), then, if ``html``, render it.
+
+    The executed copies land in ``<root>/_build/executed/book/``, their timings in
+    ``_build/executed/timings.json``, and the HTML in ``<root>/_build/html``.
+    """
+    if preset not in ("smoke", "paper"):
+        raise ConfigError(f"preset = {preset!r}: unknown; use 'smoke' or 'paper'")
+    root = Path(root).resolve()
+    if not root.is_dir():
+        raise ConfigError(f"--root {root}: no such folder")
+    execute(root, preset, force=force, only=only)
+    if html:
+        index = render(root) / "index.html"
+        print(index)

@@ -1,0 +1,298 @@
+"""The book pipeline on a tiny two-chapter book: execution, parameter injection, caching, failures, CLI.
+
+One tiny book is executed once per module and then edited by the tests in file order, so
+each test pays only for the chapters it makes re-execute (a kernel start, about two seconds).
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import os
+import shutil
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from study import book
+from study.cli import main
+from study.errors import ChapterError, ConfigError
+
+REPO = Path(__file__).resolve().parents[1]
+
+HEADER = """---
+jupytext:
+  text_representation:
+    extension: .md
+    format_name: myst
+    format_version: 0.13
+kernelspec:
+  display_name: Python 3
+  language: python
+  name: python3
+---
+"""
+
+CONFIG = """title: Tiny
+author: tests
+only_build_toc_files: true
+execute:
+  execute_notebooks: "off"
+"""
+
+TOC = """format: jb-book
+root: book/alpha
+chapters:
+  - file: book/beta
+  - file: book/notes
+"""
+
+NOTES = "# Notes\n\nA plain page: no kernel, copied as it is.\n"
+
+# alpha reads the file its parameter names and glues the preset it was given.
+ALPHA = HEADER + """
+# Alpha
+
+```{code-cell} ipython3
+:tags: [parameters]
+
+preset = "paper"
+inputs = "inputs.txt"
+```
+
+```{code-cell} ipython3
+import os
+
+import study
+from myst_nb import glue
+
+glue("preset", preset)
+glue("content", open(inputs).read().strip())
+glue("env", [os.environ.get("PYTHONHASHSEED"), os.environ.get("MUJOCO_GL"), study.__file__], display=False)
+```
+
+Preset: {glue:text}`preset`.
+"""
+
+BETA = HEADER + """
+# Beta
+
+```{code-cell} ipython3
+:tags: [parameters]
+
+preset = "paper"
+```
+
+```{code-cell} ipython3
+print("beta ran with", preset)
+```
+"""
+
+BAD = HEADER + """
+# Bad
+
+```{code-cell} ipython3
+:tags: [parameters]
+
+preset = "paper"
+```
+
+```{code-cell} ipython3
+x = 1
+```
+
+Some prose between the cells.
+
+```{code-cell} ipython3
+---
+tags: [hide-input]
+---
+y = x / 0
+```
+"""
+
+
+def write_book(root: Path, chapters: dict[str, str], toc: str) -> Path:
+    (root / "book").mkdir(parents=True, exist_ok=True)
+    (root / "_config.yml").write_text(CONFIG)
+    (root / "_toc.yml").write_text(toc)
+    for stem, text in chapters.items():
+        (root / "book" / f"{stem}.md").write_text(text)
+    return root
+
+
+def executed(root: Path, stem: str) -> Path:
+    return root / "_build" / "executed" / "book" / f"{stem}.ipynb"
+
+
+def glued(root: Path, stem: str, name: str) -> str:
+    """The text/plain of what chapter ``stem``'s executed copy glued under ``name``."""
+    nb = nbformat.read(executed(root, stem), as_version=4)
+    for cell in nb.cells:
+        for out in cell.get("outputs", []):
+            if out.get("metadata", {}).get("scrapbook", {}).get("name") == name:
+                # display=False stores it under application/papermill.record/text/plain
+                return next(v for k, v in out["data"].items() if k.endswith("text/plain"))
+    raise AssertionError(f"{stem} glued no {name!r}")
+
+
+def ran(timings: dict) -> set[str]:
+    return {stem for stem, t in timings.items() if not t["cached"]}
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A two-chapter book (and a plain page), executed once with preset 'smoke'."""
+    root = write_book(tmp_path_factory.mktemp("tiny"), {"alpha": ALPHA, "beta": BETA, "notes": NOTES}, TOC)
+    (root / "inputs.txt").write_text("first\n")
+    book.build(root, "smoke", force=False, only=None, html=False)
+    return root
+
+
+@pytest.mark.slow
+def test_build_executes_injects_and_renders(tiny: Path) -> None:
+    book.render(tiny)
+    nb = nbformat.read(executed(tiny, "alpha"), as_version=4)
+    injected = [c for c in nb.cells if "injected-parameters" in c.metadata.get("tags", [])]
+    assert len(injected) == 1 and "preset = \"smoke\"" in injected[0].source
+    assert glued(tiny, "alpha", "preset") == "'smoke'"
+    hashseed, mujoco_gl, study_file = ast.literal_eval(glued(tiny, "alpha", "env"))
+    assert hashseed == "0" and mujoco_gl == os.environ.get("MUJOCO_GL", "egl")
+    assert Path(study_file).resolve() == Path(book.__file__).resolve().parent / "__init__.py"
+    html = (tiny / "_build" / "html" / "book" / "alpha.html").read_text()
+    assert "Preset:" in html and "smoke" in html
+    assert (tiny / "_build" / "html" / "index.html").is_file()
+    timings = json.loads((tiny / "_build" / "executed" / "timings.json").read_text())
+    assert timings["preset"] == "smoke"
+    assert set(timings["chapters"]) == {"alpha", "beta", "notes"}
+    assert timings["chapters"]["notes"]["page"]
+    assert all(not t["cached"] and t["seconds"] > 0 for s, t in timings["chapters"].items() if s != "notes")
+    assert "A plain page" in (tiny / "_build" / "html" / "book" / "notes.html").read_text()
+
+
+def test_second_run_executes_nothing(tiny: Path) -> None:
+    before = executed(tiny, "beta").stat().st_mtime_ns
+    assert ran(book.execute(tiny, "smoke")) == set()
+    assert executed(tiny, "beta").stat().st_mtime_ns == before
+
+
+def test_changed_chapter_reexecutes_only_it(tiny: Path) -> None:
+    beta = tiny / "book" / "beta.md"
+    beta.write_text(beta.read_text() + "\nOne more line of prose.\n")
+    assert ran(book.execute(tiny, "smoke")) == {"beta"}
+    assert ran(book.execute(tiny, "smoke")) == set()
+
+
+def test_changed_input_file_reexecutes_the_chapter_that_names_it(tiny: Path) -> None:
+    (tiny / "inputs.txt").write_text("second\n")
+    assert ran(book.execute(tiny, "smoke")) == {"alpha"}
+    assert glued(tiny, "alpha", "content") == "'second'"
+
+
+def test_other_preset_reexecutes_everything(tiny: Path) -> None:
+    # Keys include the injected parameters: no copy made with one preset is reused for another.
+    assert ran(book.execute(tiny, "paper")) == {"alpha", "beta"}
+    assert ran(book.execute(tiny, "paper")) == set()
+
+
+def test_only_reexecutes_named_chapter_and_any_missing_one(tiny: Path) -> None:
+    executed(tiny, "alpha").unlink()
+    assert ran(book.execute(tiny, "paper", only=["beta"])) == {"alpha", "beta"}
+
+
+def test_only_unknown_chapter_is_a_config_error(tiny: Path) -> None:
+    with pytest.raises(ConfigError, match=r"gamma.*alpha, beta, notes"):
+        book.execute(tiny, "smoke", only=["gamma"])
+
+
+def test_unknown_preset_is_a_config_error(tiny: Path) -> None:
+    with pytest.raises(ConfigError, match="preset"):
+        book.build(tiny, "huge", force=False, only=None, html=False)
+
+
+def test_toc_naming_a_missing_chapter_is_a_config_error(tmp_path: Path) -> None:
+    write_book(tmp_path, {"alpha": ALPHA, "notes": NOTES}, TOC)
+    with pytest.raises(ConfigError, match=r"book/beta"):
+        book.chapters(tmp_path)
+
+
+def test_missing_toc_is_a_config_error(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="_toc.yml"):
+        book.chapters(tmp_path)
+
+
+def test_folder_fingerprint_follows_the_files_inside(tmp_path: Path) -> None:
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "a.bin").write_bytes(b"1")
+    params = {"data_dir": "d", "preset": "smoke", "nothing": "no-such-file", "n": 3, "up": "..", "here": "."}
+    first = book.inputs_fingerprint(tmp_path, params)
+    assert set(first) == {"data_dir"}
+    (tmp_path / "d" / ".b.bin.x1y2.tmp").write_bytes(b"22")  # an atomic write in progress
+    assert book.inputs_fingerprint(tmp_path, params) == first
+    (tmp_path / "d" / "b.bin").write_bytes(b"22")
+    assert book.inputs_fingerprint(tmp_path, params) != first
+
+
+@pytest.mark.slow
+def test_a_sphinx_warning_fails_the_html_build(tmp_path: Path) -> None:
+    write_book(tmp_path, {"notes": NOTES + "\nSee {ref}`no-such-label`.\n"}, "format: jb-book\nroot: book/notes\n")
+    with pytest.raises(ChapterError, match="jupyter-book build failed"):
+        book.build(tmp_path, "smoke", force=False, only=None, html=True)
+
+
+@pytest.fixture
+def bad_book(tmp_path: Path) -> Path:
+    return write_book(tmp_path, {"bad": BAD}, "format: jb-book\nroot: book/bad\n")
+
+
+def test_failing_cell_names_chapter_and_cell_and_keeps_no_complete_copy(bad_book: Path) -> None:
+    stale = executed(bad_book, "bad")
+    stale.parent.mkdir(parents=True)
+    stale.write_text("{}")  # a copy from an earlier, successful run
+    with pytest.raises(ChapterError) as info:
+        book.build(bad_book, "smoke", force=False, only=None, html=False)
+    msg = str(info.value)
+    assert "book/bad.md" in msg
+    assert "cell 4" in msg and "y = x / 0" in msg and "book/bad.md:31" in msg
+    assert "ZeroDivisionError" in msg
+    assert "_build/failed/book/bad.ipynb" in msg
+    assert not stale.exists()
+    assert (bad_book / "_build" / "failed" / "book" / "bad.ipynb").is_file()
+    assert not list((bad_book / "_build" / "executed" / "book").glob("*.ipynb"))
+    timings = json.loads((bad_book / "_build" / "executed" / "timings.json").read_text())
+    assert timings["chapters"]["bad"]["failed"]
+
+
+def test_cli_on_a_failing_book_prints_one_line_and_exits_2(
+    bad_book: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["book", "--root", str(bad_book), "--preset", "smoke", "--no-build"]) == 2
+    errors = [line for line in capsys.readouterr().err.splitlines() if line.startswith("study: error:")]
+    assert len(errors) == 1 and "book/bad.md" in errors[0] and "ZeroDivisionError" in errors[0]
+
+
+def test_cli_only_unknown_chapter_exits_2(tiny: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["book", "--root", str(tiny), "--only", "gamma", "--no-build"]) == 2
+    assert "no such chapter" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_repo_book_builds_with_smoke_preset(tmp_path: Path) -> None:
+    """The real book, preset 'smoke', into a scratch root that links to the repo's files.
+
+    Links keep the repo's own _build (maybe a 'paper' build) untouched, while the data/ caches are
+    shared, so a second run reuses the smoke dataset.
+    """
+    for entry in REPO.iterdir():
+        if entry.name not in {"_build", ".git", ".venv", ".pytest_cache"}:
+            os.symlink(entry, tmp_path / entry.name)
+    if not (REPO / "data").exists():
+        (tmp_path / "data").mkdir()
+    book.build(tmp_path, "smoke", force=False, only=None, html=True)
+    index = tmp_path / "_build" / "html" / "book" / "intro.html"
+    assert "The motion-pattern study" in index.read_text()
+    for ch in book.chapters(tmp_path):
+        if ch.source.read_text().startswith("---\njupytext"):
+            assert ch.executed.is_file(), ch.stem
+    shutil.rmtree(tmp_path / "_build")

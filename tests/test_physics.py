@@ -1,0 +1,89 @@
+"""The simulation settings checked against physics (see the data chapter for the same checks as figures)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from study import checks, synth
+from study.contact import penetration_bound
+
+
+def test_free_flight_follows_the_parabola(smoke_cfg):
+    """Contact cannot happen (launched from 12-15 m) and air is off: within 1 mm of the parabola over 1 s."""
+    high = smoke_cfg.replace(launch=synth.LaunchPrior(height=(12.0, 15.0)))
+    qpos, qvel = synth.sample_launch(high.launch, 6, np.random.default_rng(1))
+    errors = [checks.free_flight_error(smoke_cfg, qpos[i], qvel[i], duration=1.0) for i in range(6)]
+    assert max(errors) < 1e-3
+
+
+def test_free_flight_without_staggering_would_fail(smoke_cfg):
+    """The half-step velocity offset is what keeps the parabola: without it the error is g t dt / 2."""
+    expected = synth.GRAVITY * 1.0 * smoke_cfg.timestep / 2
+    assert expected > 1e-3  # so the staggering matters at our step
+
+
+@pytest.mark.parametrize("label", [0, 1])
+def test_restitution_from_bounce_heights_matches_the_value_set(smoke_cfg, label):
+    """Flat drops from several heights and masses: every bounce's sqrt(h2 / h1) within 0.05 of e."""
+    prior = smoke_cfg.prior(label)
+    for e in np.linspace(*prior.restitution, 4):
+        for drop, mass in [(0.6, prior.mass[0]), (1.0, prior.mass[1]), (1.4, math.sqrt(prior.mass[0] * prior.mass[1]))]:
+            measured = checks.restitution_from_drops(smoke_cfg, e, drop=drop, mass=mass, bounces=3)
+            assert len(measured) >= 1, f"e={e:.2f} drop={drop}: no bounce measured"
+            assert np.all(np.abs(measured - e) < 0.05), (e, drop, mass, measured)
+
+
+def test_halving_the_timestep_changes_restitution_by_less_than_0_02(smoke_cfg):
+    conv = checks.convergence(smoke_cfg, np.array([0.1, 0.3, 0.5, 0.7, 0.85]))
+    assert np.all(np.abs(conv["dt"] - conv["dt/2"]) < 0.02), conv
+
+
+@pytest.fixture(scope="module")
+def traces(smoke_cfg):
+    """Four throws per class from the smoke prior, 8 s each, every step recorded."""
+    cfg = smoke_cfg.replace(duration=8.0)
+    params = synth.sample_split(cfg, 0, "train")
+    picks = [0, 1, 2, 3, 8, 9, 10, 11]
+    return cfg, params, [checks.trace(cfg, params, i) for i in picks]
+
+
+def test_objects_come_to_rest(traces):
+    _, _, ts = traces
+    for tr in ts:
+        assert tr.speed[-900:].max() < 0.01  # below 1 cm/s for the last half second
+
+
+def test_penetration_stays_within_its_bound_and_under_2_cm(traces):
+    cfg, _, ts = traces
+    bound = penetration_bound(cfg.max_impact_speed(), cfg.stiffness)
+    assert bound < 0.02
+    assert max(tr.depth.max() for tr in ts) <= bound
+
+
+def test_energy_never_rises_between_flights_without_friction(smoke_cfg):
+    """Frictionless tumbling throws, air off: each flight's energy at most the previous one's (+0.1 %)."""
+    cfg = smoke_cfg.replace(duration=4.0, air=False, light=synth.ClassPrior((0.05, 0.5), (0.45, 0.85), (0.0, 0.0)),
+                            heavy=synth.ClassPrior((3.0, 25.0), (0.1, 0.5), (0.0, 0.0)))
+    params = synth.sample_split(cfg, 0, "train")
+    for i in [0, 1, 8, 9]:
+        e = checks.trace(cfg, params, i).flight_energies()
+        assert len(e) >= 2
+        assert np.all(np.diff(e) <= 1e-3 * e[0]), e
+
+
+def test_energy_never_rises_in_flat_drops(smoke_cfg):
+    """Flat drops with friction (no tangential motion): apex heights, hence energies, strictly fall."""
+    for e in (0.45, 0.85):
+        h = checks.restitution_from_drops(smoke_cfg, e, bounces=4)
+        assert np.all(h <= 1.0)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "known limitation, shown in the data chapter: MuJoCo's contact is a spring-damper in constraint "
+    "space, and with friction an eccentric impact of a tumbling box can leave it with more energy"))
+def test_energy_never_rises_between_flights_with_friction(traces):
+    _, _, ts = traces
+    for tr in ts:
+        e = tr.flight_energies()
+        assert np.all(np.diff(e) <= 1e-3 * e[0]), e
