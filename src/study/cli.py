@@ -110,8 +110,8 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
 
 # study.train.TrainConfig's defaults, repeated so that `study --help` need not import torch (2-3 s);
 # tests/test_train.py checks that the two agree.
-_TRAIN_DEFAULTS = argparse.Namespace(seed=0, cell="peephole", max_epochs=40, lr=3e-3, batch_size=32,
-                                     truncation=30, dropout=0.2, patience=8)
+_TRAIN_DEFAULTS = argparse.Namespace(seed=0, cell="peephole", max_epochs=60, lr=3e-3, batch_size=32,
+                                     truncation=30, dropout=0.2, patience=10)
 
 
 def _add_train(sub: argparse._SubParsersAction) -> None:

@@ -72,9 +72,9 @@ class TrainConfig:
     """Trajectories per gradient step."""
     truncation: int = 30
     """Truncated-BPTT length in frames: the loss back-propagates through at most this many last frames."""
-    max_epochs: int = 40
+    max_epochs: int = 60
     """Upper bound on passes over the training split."""
-    patience: int = 8
+    patience: int = 10
     """Stop after this many epochs without a lower validation loss; the best epoch's weights are kept."""
     val_fraction: float = 0.2
     """Share of the training split held out for early stopping (and for the grid search)."""
