@@ -102,3 +102,16 @@ def test_markdown_table():
     md = tables.markdown([{"a": 0.8123, "b": "x"}], {"a": "acc", "b": "name"}, {"a": tables.pct})
     assert md.splitlines() == ["| acc | name |", "|---|---|", "| 81.2 % | x |"]
     assert tables.pct_pm(0.8, 0.0123) == "80.0 ± 1.2 %"
+
+
+@pytest.mark.slow
+def test_parallel_runs_equal_sequential_runs(tmp_path, ds):
+    cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
+    seq = experiments.seed_runs(ds, cfg, TINY, tmp_path / "a", progress=False, workers=1)
+    par = experiments.seed_runs(ds, cfg, TINY, tmp_path / "b", progress=False, workers=2)
+    strip = lambda rows: [{k: v for k, v in r.items() if k != "seconds"} for r in rows]  # noqa: E731
+    assert strip(par) == strip(seq)
+    for f in (tmp_path / "a" / "runs").glob("*.json"):
+        a, b = json.loads(f.read_text()), json.loads((tmp_path / "b" / "runs" / f.name).read_text())
+        a.pop("train_seconds"), b.pop("train_seconds")
+        assert a == b, "the same history, bit for bit, from a worker process"

@@ -23,7 +23,9 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import json
+import multiprocessing
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -117,6 +119,23 @@ def run_key(dataset: Dataset, cfg: TrainConfig, test: bool) -> str:
     })
 
 
+def _path(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path, test: bool) -> tuple[str, Path]:
+    key = run_key(dataset, cfg, test)
+    return key, Path(data_dir) / "runs" / f"{key}.json"
+
+
+def cached(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data", test: bool = True) -> dict[str, Any] | None:
+    """The cached record of this run, or None if there is none (or it is damaged, or the dataset has no key)."""
+    key, path = _path(dataset, cfg, data_dir, test)
+    if not dataset.key or not path.is_file():
+        return None
+    try:
+        record = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError, UnicodeDecodeError):
+        return None  # a damaged entry is retrained and overwritten
+    return record if isinstance(record, dict) and record.get("key") == key else None
+
+
 def run(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data", test: bool = True) -> dict[str, Any]:
     """Train ``cfg`` on ``dataset`` (or read the cached result) and return its record.
 
@@ -124,15 +143,10 @@ def run(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data", test:
     the history, the training time and, if ``test``, the test metrics of :func:`study.train.evaluate`.
     A dataset without a key is never cached.
     """
-    key = run_key(dataset, cfg, test)
-    path = Path(data_dir) / "runs" / f"{key}.json"
-    if dataset.key and path.is_file():
-        try:
-            record = json.loads(path.read_text())
-            if record.get("key") == key:
-                return record
-        except (OSError, json.JSONDecodeError, UnicodeDecodeError):
-            pass  # a damaged entry is retrained and overwritten
+    record = cached(dataset, cfg, data_dir, test)
+    if record is not None:
+        return record
+    key, path = _path(dataset, cfg, data_dir, test)
     t0 = time.perf_counter()
     tm = train.fit(dataset, cfg, progress=False)
     record = {
@@ -147,8 +161,28 @@ def run(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data", test:
     return record
 
 
-def _runs(dataset: Dataset, cfgs: list[TrainConfig], data_dir: str | Path, test: bool, desc: str, progress: bool) -> list[dict]:
-    return [run(dataset, c, data_dir, test) for c in tqdm(cfgs, desc=desc, disable=not progress)]
+def _runs(dataset: Dataset, cfgs: list[TrainConfig], data_dir: str | Path, test: bool, desc: str, progress: bool,
+          workers: int) -> list[dict]:
+    """The records of ``cfgs`` in order: cached ones read, the others trained, in ``workers`` processes if > 1.
+
+    Every run is seeded and single-threaded (see :mod:`study.train`), so running them in parallel
+    processes gives the same records as running them one by one (tested).
+    """
+    records = [cached(dataset, c, data_dir, test) for c in cfgs]
+    todo = [i for i, r in enumerate(records) if r is None]
+    with tqdm(total=len(todo), desc=desc, disable=not progress or not todo) as bar:
+        if workers > 1 and len(todo) > 1:
+            ctx = multiprocessing.get_context("spawn")  # no fork of a process that holds torch threads
+            with ProcessPoolExecutor(min(workers, len(todo)), mp_context=ctx) as pool:
+                futures = {pool.submit(run, dataset, cfgs[i], data_dir, test): i for i in todo}
+                for f in as_completed(futures):
+                    records[futures[f]] = f.result()
+                    bar.update()
+        else:
+            for i in todo:
+                records[i] = run(dataset, cfgs[i], data_dir, test)
+                bar.update()
+    return records
 
 
 def _row(rec: dict[str, Any], *fields: str) -> dict[str, Any]:
@@ -162,14 +196,15 @@ def _row(rec: dict[str, Any], *fields: str) -> dict[str, Any]:
     return row
 
 
-def grid(dataset: Dataset, p: Preset, data_dir: str | Path = "data", progress: bool = True) -> list[dict]:
+def grid(dataset: Dataset, p: Preset, data_dir: str | Path = "data", progress: bool = True,
+         workers: int = 1) -> list[dict]:
     """The grid search on Z: one row per (lr, truncation, dropout, batch_size), validation scores only."""
     base = p.base_config()
     cfgs = [
         dataclasses.replace(base, lr=lr, truncation=k, dropout=d, batch_size=b, seed=p.grid_seed)
         for lr, k, d, b in itertools.product(p.lrs, p.truncations, p.dropouts, p.batch_sizes)
     ]
-    recs = _runs(dataset, cfgs, data_dir, False, "grid (Z)", progress)
+    recs = _runs(dataset, cfgs, data_dir, False, "grid (Z)", progress, workers)
     return [_row(r, "lr", "truncation", "dropout", "batch_size") for r in recs]
 
 
@@ -180,26 +215,29 @@ def best_config(rows: list[dict], p: Preset) -> TrainConfig:
                                dropout=best["dropout"], batch_size=best["batch_size"])
 
 
-def seed_runs(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True) -> list[dict]:
+def seed_runs(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True,
+              workers: int = 1) -> list[dict]:
     """The chosen config for Z and XYZ, one row per (dims, seed), with test accuracy."""
     cfgs = [dataclasses.replace(cfg, dims=d, seed=s) for d in ("z", "xyz") for s in p.seeds]
-    return [_row(r, "dims", "seed") for r in _runs(dataset, cfgs, data_dir, True, "seeds", progress)]
+    return [_row(r, "dims", "seed") for r in _runs(dataset, cfgs, data_dir, True, "seeds", progress, workers)]
 
 
-def length_sweep(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True) -> list[dict]:
+def length_sweep(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True,
+                 workers: int = 1) -> list[dict]:
     """Accuracy against input length: one row per (dims, length, seed) at the chosen config."""
     cfgs = [dataclasses.replace(cfg, dims=d, length=L, seed=s)
             for d in ("z", "xyz") for L in p.lengths for s in p.length_seeds]
-    rows = [_row(r, "dims", "length", "seed") for r in _runs(dataset, cfgs, data_dir, True, "lengths", progress)]
+    rows = [_row(r, "dims", "length", "seed") for r in _runs(dataset, cfgs, data_dir, True, "lengths", progress, workers)]
     for r in rows:
         r["frames"] = train.TrainConfig(length=r["length"]).n_frames(dataset.fps)
     return rows
 
 
-def ablation(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True) -> list[dict]:
+def ablation(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True,
+             workers: int = 1) -> list[dict]:
     """Peephole LSTM vs nn.LSTM vs GRU at the chosen config on ``p.ablation_dims``, same seeds."""
     cfgs = [dataclasses.replace(cfg, dims=p.ablation_dims, cell=c, seed=s) for c in p.cells for s in p.seeds]
-    return [_row(r, "cell", "dims", "seed") for r in _runs(dataset, cfgs, data_dir, True, "ablation", progress)]
+    return [_row(r, "cell", "dims", "seed") for r in _runs(dataset, cfgs, data_dir, True, "ablation", progress, workers)]
 
 
 def baseline_runs(dataset: Dataset, p: Preset) -> list[dict]:
