@@ -5,7 +5,8 @@ random inputs of shape (B, T, 3); one training step is forward + backward (full 
 for T = 90 and 300 frames: ms per step, sequences per second, the time of one epoch of the paper's
 training set (1600 sequences), and the peephole/nn.LSTM throughput ratio (1.0 = as fast as the
 vendor kernel; issue 5's target is >= 0.7 on CPU, >= 0.5 on GPU). Also the streaming cost: one
-frame's update of a single trajectory's state. On CUDA too when a GPU is present (batch 128 and 1024).
+frame's update of a single trajectory's state. Batch 32 as well on CPU (the training default). On
+CUDA too when a GPU is present (batch 128 and 1024).
 
     python benchmarks/bench_train.py [--quick] [--threads N] [--device cpu|cuda|all]
 """
@@ -79,7 +80,8 @@ def main() -> None:
     print(f"torch {torch.__version__}, {a.threads} CPU thread(s); 2 x 64 classifier, full BPTT, Adam")
     print(f"{'device':6} {'B':>5} {'T':>4} {'cell':9} {'ms/step':>9} {'seq/s':>9} {'epoch s':>8} {'ratio':>6}")
     for device in devices:
-        shapes = [(128, 90)] if (a.quick and device == "cpu") else [(128, 90), (128, 300)]
+        # batch 32 too: the training defaults' batch, where the per-step overhead of eager ops dominates
+        shapes = [(128, 90)] if (a.quick and device == "cpu") else [(128, 90), (128, 300), (32, 90)]
         if device == "cuda":
             shapes += [(1024, 90), (1024, 300)]
         for B, T in shapes:
