@@ -1,10 +1,12 @@
 """The peephole LSTM against a plain reference and nn.LSTM; streaming equals whole-sequence."""
 
+import numpy as np
 import pytest
 import torch
 
-from study.errors import ConfigError
+from study.errors import ConfigError, TrajectoryError
 from study.model import CELLS, Classifier, PeepholeLSTM, peephole_reference
+from study.stream import Streamer
 
 
 def _layer(D: int = 3, H: int = 5, seed: int = 0) -> PeepholeLSTM:
@@ -16,7 +18,8 @@ def _grads(fn, layer, x, state):
     """Outputs and gradients of a random projection of outputs and final state w.r.t. everything."""
     out, (h, c) = fn(layer, x, state)
     g = torch.Generator().manual_seed(1)
-    loss = (out * torch.randn(out.shape, generator=g, dtype=out.dtype)).sum() + (h * c).sum()
+    weights = torch.randn(out.shape, generator=g, dtype=torch.float64).to(out.dtype)  # same draws in any dtype
+    loss = (out * weights).sum() + (h * c).sum()
     inputs = [x, *state, *layer.parameters()]
     return out, torch.autograd.grad(loss, inputs)
 
@@ -108,3 +111,54 @@ def test_dropout_only_in_training_mode():
 def test_unknown_cell():
     with pytest.raises(ConfigError, match="cell"):
         Classifier(3, cell="transformer")
+
+
+def test_float32_layer_matches_float64_reference_within_1e_5():
+    """The fused layer in single precision (training's dtype) against the plain reference in double."""
+    torch.manual_seed(3)
+    layer = PeepholeLSTM(3, 16)
+    x = torch.randn(4, 50, 3)
+    state = (torch.randn(4, 16), torch.randn(4, 16))
+    out, grads = _grads(lambda m, x, s: m(x, s), layer, x.requires_grad_(), [s.requires_grad_() for s in state])
+    ref = PeepholeLSTM(3, 16).double()
+    ref.load_state_dict({k: v.double() for k, v in layer.state_dict().items()})
+    x64 = x.detach().double().requires_grad_()
+    s64 = [s.detach().double().requires_grad_() for s in state]
+    ref_out, ref_grads = _grads(peephole_reference, ref, x64, s64)
+    torch.testing.assert_close(out.double(), ref_out, atol=1e-5, rtol=0)
+    for a, b in zip(grads, ref_grads):
+        torch.testing.assert_close(a.double(), b, atol=1e-5, rtol=1e-5)
+
+
+def test_layer_without_grad_equals_layer_with_grad():
+    layer = _layer()
+    x = torch.randn(2, 8, 3, dtype=torch.float64)
+    with_grad, _ = layer(x)
+    with torch.no_grad():
+        without, _ = layer(x)
+    assert torch.equal(with_grad.detach(), without)
+
+
+@pytest.mark.parametrize("cell", ["peephole", "lstm"])
+def test_numpy_streamer_equals_whole_sequence(cell):
+    torch.manual_seed(0)
+    net = Classifier(3, hidden=8, layers=2, cell=cell).double().eval()
+    net.set_scale(torch.tensor([0.5, 2.0, 0.3], dtype=torch.float64))
+    x = torch.randn(1, 12, 3, dtype=torch.float64)
+    s = Streamer(net, dtype=np.float64)
+    for t in range(x.shape[1]):
+        probs = s.push(x[0, t].numpy())
+        with torch.no_grad():
+            whole = torch.softmax(net(x[:, : t + 1]), dim=-1)[0].numpy()
+        np.testing.assert_allclose(probs, whole, atol=1e-12, rtol=0)
+    s.reset()
+    np.testing.assert_allclose(s.push(x[0, 0].numpy()),
+                               torch.softmax(net(x[:, :1]), dim=-1)[0].detach().numpy(), atol=1e-12, rtol=0)
+
+
+def test_streamer_rejects_gru_and_wrong_frames():
+    with pytest.raises(ConfigError, match="gru"):
+        Streamer(Classifier(1, hidden=4, cell="gru"))
+    s = Streamer(Classifier(1, hidden=4))
+    with pytest.raises(TrajectoryError, match=r"\(1,\)"):
+        s.push(np.zeros(3))

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
-from tqdm.auto import tqdm
+from tqdm import tqdm
 
 from study import CLASSES, cache, render, track
 from study.errors import ConfigError, DataError, StudyError

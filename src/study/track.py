@@ -25,7 +25,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-from tqdm.auto import tqdm
+from tqdm import tqdm
 
 from study.cache import write_text_atomic
 from study.errors import ConfigError, TrackingError, TrajectoryError, check_range
