@@ -38,6 +38,10 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
     n_files = len(list((tmp_path / "runs").glob("*.json")))
     assert n_files == 2 + 4 + 2  # the length sweep's 0.5 s runs are the seed runs' (cache hits)
     assert experiments.n_models(dataclasses.replace(TINY, cells=("peephole",))) == n_files
+    control = experiments.full_bptt_control(ds, cfg, dataclasses.replace(TINY, control_lengths=(0.5,)), tmp_path,
+                                            progress=False)
+    assert [(r["dims"], r["length"], r["truncation"]) for r in control] == [("z", 0.5, 15), ("xyz", 0.5, 15)], \
+        "the control back-propagates through every frame of the input"
 
     def no_training(*a, **k):
         raise AssertionError("a cached run was retrained")

@@ -74,6 +74,10 @@ class Preset:
     """Cells compared in the ablation."""
     ablation_dims: str = "z"
     """Input dims of the ablation (the grid's, as in the paper's search)."""
+    control_lengths: tuple[float, ...] = ()
+    """Lengths at which the length sweep is repeated with full back-propagation (no truncation), seconds."""
+    control_seeds: tuple[int, ...] = (0,)
+    """Seeds of those full-BPTT control runs."""
 
     def base_config(self) -> TrainConfig:
         """The config every run starts from, before the grid values are set."""
@@ -90,6 +94,7 @@ PRESETS: dict[str, Preset] = {
     "smoke": Preset(
         name="smoke", length=1.0, lrs=(3e-3,), truncations=(10, 30), dropouts=(0.2,), batch_sizes=(32,),
         seeds=(0, 1), lengths=(0.5, 1.0, 1.5), length_seeds=(0, 1), max_epochs=3, patience=2,
+        control_lengths=(1.5,),
     ),
     # The real thing, at the issue's minimum: a 2x2x2x2 grid on Z at 3 s (90 frames); 5 seeds for Z
     # and XYZ; 8 lengths x 3 seeds x 2 dims; the ablation's 2 other cells x 5 seeds: 78 trained models
@@ -100,6 +105,8 @@ PRESETS: dict[str, Preset] = {
         name="paper", length=3.0, lrs=(1e-3, 3e-3), truncations=(30, 90), dropouts=(0.2, 0.5),
         batch_sizes=(32, 128), seeds=(0, 1, 2, 3, 4), lengths=(0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0),
         length_seeds=(0, 1, 2), max_epochs=60, patience=10,
+        # The length sweep's long inputs, again with full BPTT, X, Y, Z and Z, one seed: 4 more models.
+        control_lengths=(6.0, 8.0),
     ),
 }
 
@@ -233,6 +240,25 @@ def length_sweep(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | 
     return rows
 
 
+def full_bptt_control(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data",
+                      progress: bool = True, workers: int = 1) -> list[dict]:
+    """The length sweep at ``p.control_lengths`` with full back-propagation through time.
+
+    With truncation k, the gradient of the loss at frame T reaches frames T - k .. T only; when those
+    frames show an object at rest, nothing tells the network what the earlier, informative frames should
+    leave in its state. These runs set the truncation to the whole input, so the gradient reaches every
+    frame: one row per (dims, length, seed), with the truncation used.
+    """
+    cfgs = [dataclasses.replace(cfg, dims=d, length=L, seed=s, truncation=max(cfg.truncation, cfg_frames))
+            for d in ("z", "xyz") for L in p.control_lengths for s in p.control_seeds
+            for cfg_frames in [train.TrainConfig(length=L).n_frames(dataset.fps)]]
+    rows = [_row(r, "dims", "length", "seed", "truncation")
+            for r in _runs(dataset, cfgs, data_dir, True, "full BPTT", progress, workers)]
+    for r in rows:
+        r["frames"] = train.TrainConfig(length=r["length"]).n_frames(dataset.fps)
+    return rows
+
+
 def ablation(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True,
              workers: int = 1) -> list[dict]:
     """Peephole LSTM vs nn.LSTM vs GRU at the chosen config on ``p.ablation_dims``, same seeds."""
@@ -271,7 +297,8 @@ def n_models(p: Preset) -> int:
     seed of ``p.seeds`` are the seed runs' (the same config, so the same cache entry)."""
     shared = 2 * len(set(p.length_seeds) & set(p.seeds)) if p.length in p.lengths else 0
     sweep = 2 * len(p.lengths) * len(p.length_seeds) - shared
-    return p.n_grid + 2 * len(p.seeds) + sweep + (len(p.cells) - 1) * len(p.seeds)
+    control = 2 * len(p.control_lengths) * len(p.control_seeds)
+    return p.n_grid + 2 * len(p.seeds) + sweep + (len(p.cells) - 1) * len(p.seeds) + control
 
 
 def long_input_effect(summary: list[dict], dims: str) -> dict[str, Any]:
