@@ -25,7 +25,7 @@ from typing import Any
 import mujoco
 import numpy as np
 from mujoco import rollout
-from tqdm.auto import tqdm
+from tqdm import tqdm
 
 from study import CLASSES, __version__, cache, data
 from study.contact import damping_for_restitution, penetration_bound, restitution_range
