@@ -79,16 +79,17 @@ def _recurrence(
     xw: torch.Tensor, h0: torch.Tensor, c0: torch.Tensor, weight_hh: torch.Tensor,
     w_cif: torch.Tensor, w_co: torch.Tensor,
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
-    """The forward time loop, written for few kernel launches per step (nine, all in preallocated buffers).
+    """The forward time loop, written for few kernel launches per step (eight, all in preallocated buffers).
 
-    ``xw`` (T, B, 4H): the projected input ``W_ih x_t + b``, time-major. ``w_cif`` (2, H): the input and
+    ``xw`` (T, B, 4H): the projected input ``W_ih x_t + b``, time-major; it is overwritten in place with
+    the activated gates, so the recurrent matmul adds into it without a copy. ``w_cif`` (2, H): the input and
     forget peepholes stacked. Returns, time-major: the activated gates (T, B, 4H) in order i, f, g, o;
     the cell states (T + 1, B, H) and hidden states (T + 1, B, H), index 0 holding ``c0`` and ``h0``;
     and tanh of the cell states (T, B, H).
     """
     T, B, H4 = xw.shape
     H = H4 // 4
-    gates = torch.empty_like(xw)
+    gates = xw
     cs = xw.new_empty(T + 1, B, H)
     hs = xw.new_empty(T + 1, B, H)
     tcs = xw.new_empty(T, B, H)
@@ -96,12 +97,12 @@ def _recurrence(
     w_hh_t = weight_hh.t().contiguous()  # (H, 4H)
     # Per-step views made once, outside the loop: indexing costs as much as a small kernel here.
     g4 = gates.view(T, B, 4, H)
-    steps = zip(xw.unbind(0), gates.unbind(0), g4[:, :, :2].unbind(0), g4[:, :, 0].unbind(0),
+    steps = zip(gates.unbind(0), g4[:, :, :2].unbind(0), g4[:, :, 0].unbind(0),
                 g4[:, :, 1].unbind(0), g4[:, :, 2].unbind(0), g4[:, :, 3].unbind(0),
                 cs[:-1].unsqueeze(2).unbind(0), cs[:-1].unbind(0), cs[1:].unbind(0),
                 hs[:-1].unbind(0), hs[1:].unbind(0), tcs.unbind(0))
-    for xw_t, gate, if_, i, f, g, o, c_old2, c_old, c_new, h_old, h_new, tc in steps:
-        torch.addmm(xw_t, h_old, w_hh_t, out=gate)  # pre-activations (B, 4H)
+    for gate, if_, i, f, g, o, c_old2, c_old, c_new, h_old, h_new, tc in steps:
+        gate.addmm_(h_old, w_hh_t)  # pre-activations (B, 4H)
         if_.addcmul_(c_old2, w_cif).sigmoid_()  # i, f see the old cell
         g.tanh_()
         torch.mul(f, c_old, out=c_new).addcmul_(i, g)  # c = f c + i g
@@ -133,33 +134,44 @@ class PeepholeFunction(torch.autograd.Function):
         T, B, H4 = gates.shape
         H = H4 // 4
         i, f, g, o = gates.view(T, B, 4, H).unbind(2)  # each (T, B, H)
-        # Derivative factors for all steps at once: d(pre-activation) = (upstream) * factor.
-        a_o = tcs * o * (1 - o)  # do_pre = dh * a_o
-        b_c = o * (1 - tcs * tcs)  # dc += dh * b_c
-        k_ifg = torch.stack((g * i * (1 - i), cs[:-1] * f * (1 - f), i * (1 - g * g)), dim=2)  # (T, B, 3, H)
-        w_cif = torch.stack((w_ci, w_cf))  # (2, H)
-        d_out = (d_out if d_out is not None else x.new_zeros(B, T, H)).transpose(0, 1)  # (T, B, H)
+        c_old, h = cs[:-1], hs[1:]
+        # Derivative factors for all steps at once, each written with as few passes over (T, B, H) as
+        # possible (sigmoid' = s - s^2, and o * tanh(c) is h itself):
+        a_o = torch.addcmul(h, h, o, value=-1)  # o tanh(c) (1 - o):  dL/d(o pre-activation) = dh * a_o
+        b_c = torch.addcmul(o, h, tcs, value=-1).addcmul_(a_o, w_co)  # dc_t += dh * b_c (w_co path included)
+        k_ifg = x.new_empty(T, B, 3, H)  # dL/d(i, f, g pre-activations) = dc_t * k_ifg
+        k_i, k_f, k_g = k_ifg.unbind(2)
+        torch.addcmul(i, i, i, value=-1, out=k_i).mul_(g)  # g i (1 - i)
+        torch.addcmul(f, f, f, value=-1, out=k_f).mul_(c_old)  # c_{t-1} f (1 - f)
+        torch.addcmul(torch.ones_like(w_ci), g, g, value=-1, out=k_g).mul_(i)  # i (1 - g^2)
+        f_c = torch.addcmul(f, k_i, w_ci).addcmul_(k_f, w_cf)  # dL/dc_{t-1} = dc_t * f_c
+        # Our own time-major copy of dL/dh_t from above: the recurrent matmul adds into it in place.
+        d_out = x.new_zeros(T, B, H) if d_out is None else d_out.transpose(0, 1).clone(memory_format=torch.contiguous_format)
         dh = d_out[-1] + d_h if d_h is not None else d_out[-1].clone()
         dc = d_c.clone() if d_c is not None else x.new_zeros(B, H)
         d_gates = torch.empty_like(gates)  # (T, B, 4H) gradients of the pre-activations
         dg4 = d_gates.view(T, B, 4, H)
-        steps = zip(d_gates.unbind(0), dg4[:, :, :3].unbind(0), dg4[:, :, :2].unbind(0), dg4[:, :, 3].unbind(0),
-                    a_o.unbind(0), b_c.unbind(0), k_ifg.unbind(0), f.unbind(0), d_out.unbind(0))
-        for t, (dg, dg_ifg, dg_if, dg_o, a_o_t, b_c_t, k_t, f_t, _) in reversed(list(enumerate(steps))):
+        steps = zip(d_gates.unbind(0), dg4[:, :, :3].unbind(0), dg4[:, :, 3].unbind(0),
+                    a_o.unbind(0), b_c.unbind(0), k_ifg.unbind(0), f_c.unbind(0))
+        for t, (dg, dg_ifg, dg_o, a_o_t, b_c_t, k_t, f_c_t) in reversed(list(enumerate(steps))):
             torch.mul(dh, a_o_t, out=dg_o)
-            dc = dc.addcmul(dh, b_c_t).addcmul_(dg_o, w_co)  # total dL/dc_t
+            dc.addcmul_(dh, b_c_t)  # total dL/dc_t
             torch.mul(dc.unsqueeze(1), k_t, out=dg_ifg)
-            dc = (dc * f_t).add_((dg_if * w_cif).sum(1))  # dL/dc_{t-1}
-            dh = torch.addmm(d_out[t - 1], dg, weight_hh) if t else torch.mm(dg, weight_hh)
+            dc.mul_(f_c_t)  # dL/dc_{t-1}
+            dh = d_out[t - 1].addmm_(dg, weight_hh) if t else torch.mm(dg, weight_hh)
         flat = d_gates.reshape(T * B, H4)
         need = ctx.needs_input_grad
         dx = (d_gates @ weight_ih).transpose(0, 1) if need[0] else None  # (B, T, D)
-        d_w_ih = flat.t() @ x.transpose(0, 1).reshape(T * B, -1) if need[3] else None
-        d_w_hh = flat.t() @ hs[:-1].reshape(T * B, H) if need[4] else None
+        # Both weight gradients in one matrix product over all time steps: [x_t, h_{t-1}] (T B, D + H).
+        xh = torch.cat((x.transpose(0, 1).reshape(T * B, -1), hs[:-1].reshape(T * B, H)), dim=1)
+        d_w = flat.t() @ xh  # (4H, D + H)
+        D = x.shape[2]
+        d_w_ih = d_w[:, :D].contiguous() if need[3] else None
+        d_w_hh = d_w[:, D:].contiguous() if need[4] else None
         d_bias = flat.sum(0) if need[5] else None
-        dgi, dgf, _, dgo = d_gates.view(T, B, 4, H).unbind(2)
-        d_w_ci = (dgi * cs[:-1]).sum((0, 1))
-        d_w_cf = (dgf * cs[:-1]).sum((0, 1))
+        dgi, dgf, _, dgo = dg4.unbind(2)
+        d_w_ci = (dgi * c_old).sum((0, 1))
+        d_w_cf = (dgf * c_old).sum((0, 1))
         d_w_co = (dgo * cs[1:]).sum((0, 1))
         return dx, dh, dc, d_w_ih, d_w_hh, d_bias, d_w_ci, d_w_cf, d_w_co
 
