@@ -61,6 +61,8 @@ def test_run_record_and_key(tmp_path, ds):
             experiments.run_key(ds, dataclasses.replace(cfg, seed=1), True),
             experiments.run_key(model_toys.dataset(n=16, T=20, key="other"), cfg, True)}
     assert len(keys) == 4
+    tm = train.load(experiments.model_dir(ds, cfg, tmp_path))  # the run left its model for reuse
+    assert tm.config == cfg and train.evaluate(tm, ds.test) == rec["test"]
     (tmp_path / "runs" / f"{rec['key']}.json").write_text("{broken")
     again = experiments.run(ds, cfg, tmp_path)
     assert again["test"] == rec["test"], "a damaged cache entry is retrained, with the same result"

@@ -131,6 +131,12 @@ def _path(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path, test: bool) 
     return key, Path(data_dir) / "runs" / f"{key}.json"
 
 
+def model_dir(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data") -> Path:
+    """Where :func:`run` keeps the trained model of ``cfg`` (``study.train.load`` reads it): one folder
+    per config and dataset, whether or not the run was scored on the test split."""
+    return Path(data_dir) / "models" / run_key(dataset, cfg, test=False)
+
+
 def cached(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data", test: bool = True) -> dict[str, Any] | None:
     """The cached record of this run, or None if there is none (or it is damaged, or the dataset has no key)."""
     key, path = _path(dataset, cfg, data_dir, test)
@@ -148,7 +154,7 @@ def run(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data", test:
 
     The record holds the config, the validation accuracy and loss at the kept epoch, the epochs run,
     the history, the training time and, if ``test``, the test metrics of :func:`study.train.evaluate`.
-    A dataset without a key is never cached.
+    The trained model itself is saved in :func:`model_dir`. A dataset without a key is never cached.
     """
     record = cached(dataset, cfg, data_dir, test)
     if record is not None:
@@ -156,6 +162,8 @@ def run(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data", test:
     key, path = _path(dataset, cfg, data_dir, test)
     t0 = time.perf_counter()
     tm = train.fit(dataset, cfg, progress=False)
+    if dataset.key:
+        tm.save(model_dir(dataset, cfg, data_dir))  # so a chapter that needs this very model loads it
     record = {
         "key": key, "format": RUN_FORMAT, "data_key": dataset.key, "config": dataclasses.asdict(cfg),
         "val_accuracy": tm.val_accuracy, "val_loss": tm.history[tm.best_epoch]["val_loss"],

@@ -200,13 +200,14 @@ def classify(
 def trained_z_model(dataset, preset_name: str, data_dir: str | Path = "data", progress: bool = False):
     """The Z-only classifier of the paper's real-world test: the grid's best config on Z, trained on ``dataset``.
 
-    The trained model is kept in ``data_dir/models/<run key>`` and reloaded when present.
+    The trained model is kept in ``experiments.model_dir`` and reloaded when present: the Table 1
+    chapter's Z run with the same config and seed has already left it there.
     """
     from study import experiments, train
 
     p = experiments.preset(preset_name)
     cfg = experiments.best_config(experiments.grid(dataset, p, data_dir=data_dir, progress=progress), p)
-    folder = Path(data_dir) / "models" / experiments.run_key(dataset, cfg, test=False)
+    folder = experiments.model_dir(dataset, cfg, data_dir)
     if folder.is_dir():
         try:
             return train.load(folder)
