@@ -295,4 +295,7 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path) -> None:
     for ch in book.chapters(tmp_path):
         if ch.source.read_text().startswith("---\njupytext"):
             assert ch.executed.is_file(), ch.stem
+        page = tmp_path / "_build" / "html" / "book" / f"{ch.stem}.html"
+        text = page.read_text()  # Sphinx's smart quotes turn a table's |---| into |—| when it is left as text
+        assert "|---|" not in text and "|\u2014|" not in text, f"{ch.stem}: a Markdown table was rendered as text"
     shutil.rmtree(tmp_path / "_build")
