@@ -242,10 +242,8 @@ def length_sweep(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | 
     """Accuracy against input length: one row per (dims, length, seed) at the chosen config."""
     cfgs = [dataclasses.replace(cfg, dims=d, length=L, seed=s)
             for d in ("z", "xyz") for L in p.lengths for s in p.length_seeds]
-    rows = [_row(r, "dims", "length", "seed") for r in _runs(dataset, cfgs, data_dir, True, "lengths", progress, workers)]
-    for r in rows:
-        r["frames"] = train.TrainConfig(length=r["length"]).n_frames(dataset.fps)
-    return rows
+    recs = _runs(dataset, cfgs, data_dir, True, "lengths", progress, workers)
+    return [_row(r, "dims", "length", "seed") | {"frames": c.n_frames(dataset.fps)} for r, c in zip(recs, cfgs)]
 
 
 def full_bptt_control(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data",
@@ -257,14 +255,12 @@ def full_bptt_control(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: s
     leave in its state. These runs set the truncation to the whole input, so the gradient reaches every
     frame: one row per (dims, length, seed), with the truncation used.
     """
-    cfgs = [dataclasses.replace(cfg, dims=d, length=L, seed=s, truncation=max(cfg.truncation, cfg_frames))
-            for d in ("z", "xyz") for L in p.control_lengths for s in p.control_seeds
-            for cfg_frames in [train.TrainConfig(length=L).n_frames(dataset.fps)]]
-    rows = [_row(r, "dims", "length", "seed", "truncation")
-            for r in _runs(dataset, cfgs, data_dir, True, "full BPTT", progress, workers)]
-    for r in rows:
-        r["frames"] = train.TrainConfig(length=r["length"]).n_frames(dataset.fps)
-    return rows
+    swept = [dataclasses.replace(cfg, dims=d, length=L, seed=s)
+             for d in ("z", "xyz") for L in p.control_lengths for s in p.control_seeds]
+    cfgs = [dataclasses.replace(c, truncation=max(c.truncation, c.n_frames(dataset.fps))) for c in swept]
+    recs = _runs(dataset, cfgs, data_dir, True, "full BPTT", progress, workers)
+    return [_row(r, "dims", "length", "seed", "truncation") | {"frames": c.n_frames(dataset.fps)}
+            for r, c in zip(recs, cfgs)]
 
 
 def ablation(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True,
