@@ -4,7 +4,9 @@ Both are the full classifier of ``study.model`` (2 layers x 64 units, dropout, l
 random inputs of shape (B, T, 3); one training step is forward + backward (full BPTT) + Adam. Prints,
 for T = 90 and 300 frames: ms per step, sequences per second, the time of one epoch of the paper's
 training set (1600 sequences), and the peephole/nn.LSTM throughput ratio (1.0 = as fast as the
-vendor kernel; issue 5's target is >= 0.7 on CPU, >= 0.5 on GPU). Also the streaming cost: one
+vendor kernel; issue 5's target is >= 0.7 on CPU, >= 0.5 on GPU). On CPU a third row, ``peephole-pt``,
+times the same layer with its time loop as PyTorch operations instead of the compiled loop of
+``study.native`` (the plain baseline of that kernel). Also the streaming cost: one
 frame's update of a single trajectory's state. Batch 32 as well on CPU (the training default). On
 CUDA too when a GPU is present (batch 128 and 1024).
 
@@ -14,12 +16,14 @@ CUDA too when a GPU is present (batch 128 and 1024).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import time
 
 import numpy as np
 import torch
 import torch.nn.functional as F
 
+from study import native
 from study.model import Classifier
 from study.stream import Streamer
 
@@ -43,17 +47,18 @@ def time_steps(cells: tuple[str, ...], B: int, T: int, steps: int, device: str) 
     nets = {}
     for cell in cells:
         torch.manual_seed(0)
-        net = Classifier(3, hidden=64, layers=2, dropout=0.2, cell=cell).to(device).train()
+        net = Classifier(3, hidden=64, layers=2, dropout=0.2, cell=cell.split("-")[0]).to(device).train()
         nets[cell] = (net, torch.optim.Adam(net.parameters(), lr=1e-3))
     times: dict[str, list[float]] = {c: [] for c in cells}
     for i in range(steps + 1):
         for cell, (net, opt) in nets.items():
             _sync(device)
             t0 = time.perf_counter()
-            loss = F.cross_entropy(net(x), y)
-            opt.zero_grad(set_to_none=True)
-            loss.backward()
-            opt.step()
+            with native.disabled() if cell.endswith("-pt") else contextlib.nullcontext():
+                loss = F.cross_entropy(net(x), y)
+                opt.zero_grad(set_to_none=True)
+                loss.backward()
+                opt.step()
             _sync(device)
             if i:
                 times[cell].append(time.perf_counter() - t0)
@@ -105,17 +110,19 @@ def main() -> None:
     devices = [d for d in devices if d == "cpu" or torch.cuda.is_available()]
     steps = 3 if a.quick else 9
     print(f"torch {torch.__version__}, {a.threads} CPU thread(s); 2 x 64 classifier, full BPTT, Adam")
-    print(f"{'device':6} {'B':>5} {'T':>4} {'cell':9} {'ms/step':>9} {'seq/s':>9} {'epoch s':>8} {'ratio':>6}")
+    print(f"peephole backend: {native.backend()} (peephole-pt: the same layer as PyTorch operations, the plain baseline)")
+    print(f"{'device':6} {'B':>5} {'T':>4} {'cell':11} {'ms/step':>9} {'seq/s':>9} {'epoch s':>8} {'ratio':>6}")
     for device in devices:
         # batch 32 too: the training defaults' batch, where the per-step overhead of eager ops dominates
         shapes = [(128, 90)] if (a.quick and device == "cpu") else [(128, 90), (128, 300), (32, 90)]
         if device == "cuda":
             shapes += [(1024, 90), (1024, 300)]
         for B, T in shapes:
-            res = time_steps(("lstm", "peephole"), B, T, steps if device == "cpu" else 10, device)
+            cells = ("lstm", "peephole", "peephole-pt") if device == "cpu" and native.active() else ("lstm", "peephole")
+            res = time_steps(cells, B, T, steps if device == "cpu" else 10, device)
             for cell, s in res.items():
                 ratio = res["lstm"] / s
-                print(f"{device:6} {B:5d} {T:4d} {cell:9} {s * 1e3:9.1f} {B / s:9.0f} "
+                print(f"{device:6} {B:5d} {T:4d} {cell:11} {s * 1e3:9.1f} {B / s:9.0f} "
                       f"{EPOCH_SEQUENCES / B * s:8.2f} {ratio:6.2f}")
     frames = 300 if a.quick else 2000
     stream = {c: time_stream(c, frames) for c in ("lstm", "peephole")}

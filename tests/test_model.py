@@ -4,9 +4,22 @@ import numpy as np
 import pytest
 import torch
 
+from study import native
 from study.errors import ConfigError, TrajectoryError
 from study.model import CELLS, Classifier, PeepholeLSTM, peephole_reference
 from study.stream import Streamer
+
+
+@pytest.fixture(params=["native", "torch"])
+def backend(request, monkeypatch):
+    """Run a test with the compiled time loop (peephole.cpp) and with the PyTorch-operations loop."""
+    monkeypatch.setenv("STUDY_NATIVE", "1" if request.param == "native" else "0")
+    native.load.cache_clear()
+    if request.param == "native" and native.load() is None:
+        pytest.skip("the compiled loop is not available here (no C++ compiler)")
+    assert native.backend() == request.param
+    yield request.param
+    native.load.cache_clear()
 
 
 def _layer(D: int = 3, H: int = 5, seed: int = 0) -> PeepholeLSTM:
@@ -24,7 +37,7 @@ def _grads(fn, layer, x, state):
     return out, torch.autograd.grad(loss, inputs)
 
 
-def test_peephole_layer_equals_plain_reference_outputs_and_gradients():
+def test_peephole_layer_equals_plain_reference_outputs_and_gradients(backend):
     layer = _layer()
     x = torch.randn(3, 7, 3, dtype=torch.float64, requires_grad=True)
     state = (torch.randn(3, 5, dtype=torch.float64, requires_grad=True),
@@ -37,7 +50,7 @@ def test_peephole_layer_equals_plain_reference_outputs_and_gradients():
     assert all(g.abs().sum() > 0 for g in fast_g), "every parameter, the input and the state get a gradient"
 
 
-def test_peepholes_matter():
+def test_peepholes_matter(backend):
     """Guard against a reference that ignores the peepholes in the same way as the layer."""
     layer = _layer()
     x = torch.randn(2, 6, 3, dtype=torch.float64)
@@ -49,13 +62,13 @@ def test_peepholes_matter():
     torch.testing.assert_close(after, peephole_reference(layer, x)[0], atol=1e-6, rtol=0)
 
 
-def test_gradcheck():
+def test_gradcheck(backend):
     layer = _layer(D=2, H=3)
     x = torch.randn(2, 4, 2, dtype=torch.float64, requires_grad=True)
     assert torch.autograd.gradcheck(lambda x: layer(x)[0], (x,))
 
 
-def test_zero_peepholes_equal_nn_lstm():
+def test_zero_peepholes_equal_nn_lstm(backend):
     layer = _layer(D=3, H=6)
     torch.manual_seed(2)
     ref = torch.nn.LSTM(3, 6, batch_first=True).double()
@@ -74,7 +87,7 @@ def test_zero_peepholes_equal_nn_lstm():
 
 
 @pytest.mark.parametrize("cell", CELLS)
-def test_streaming_equals_whole_sequence(cell):
+def test_streaming_equals_whole_sequence(cell, backend):
     torch.manual_seed(0)
     net = Classifier(3, hidden=8, layers=2, cell=cell).double().eval()
     net.set_scale(torch.tensor([0.5, 2.0, 0.3]))
@@ -113,7 +126,7 @@ def test_unknown_cell():
         Classifier(3, cell="transformer")
 
 
-def test_float32_layer_matches_float64_reference_within_1e_5():
+def test_float32_layer_matches_float64_reference_within_1e_5(backend):
     """The fused layer in single precision (training's dtype) against the plain reference in double."""
     torch.manual_seed(3)
     layer = PeepholeLSTM(3, 16)
@@ -130,7 +143,7 @@ def test_float32_layer_matches_float64_reference_within_1e_5():
         torch.testing.assert_close(a.double(), b, atol=1e-5, rtol=1e-5)
 
 
-def test_layer_without_grad_equals_layer_with_grad():
+def test_layer_without_grad_equals_layer_with_grad(backend):
     layer = _layer()
     x = torch.randn(2, 8, 3, dtype=torch.float64)
     with_grad, _ = layer(x)
@@ -162,3 +175,45 @@ def test_streamer_rejects_gru_and_wrong_frames():
     s = Streamer(Classifier(1, hidden=4))
     with pytest.raises(TrajectoryError, match=r"\(1,\)"):
         s.push(np.zeros(3))
+
+
+def test_native_and_torch_loops_agree_in_float32(monkeypatch):
+    """The two implementations of the time loop compute the same numbers up to float32 rounding."""
+    if native.load() is None:
+        pytest.skip("the compiled loop is not available here (no C++ compiler)")
+    torch.manual_seed(4)
+    net = Classifier(3, hidden=32).eval()  # no dropout: the same function on both runs
+    x = torch.randn(8, 40, 3)
+    results = []
+    for flag in ("1", "0"):
+        monkeypatch.setenv("STUDY_NATIVE", flag)
+        native.load.cache_clear()
+        net.zero_grad()
+        out = net(x)
+        out.square().sum().backward()
+        results.append((out.detach(), [p.grad.clone() for p in net.parameters()]))
+    native.load.cache_clear()
+    (a, ga), (b, gb) = results
+    torch.testing.assert_close(a, b, atol=1e-5, rtol=0)
+    for u, v in zip(ga, gb):
+        torch.testing.assert_close(u, v, atol=1e-5, rtol=1e-4)
+
+
+def test_native_falls_back_with_a_warning_when_it_cannot_compile(monkeypatch, tmp_path):
+    monkeypatch.setenv("STUDY_NATIVE_DIR", str(tmp_path))
+    monkeypatch.setenv("CXX", "no-such-compiler-xyz")
+    native.load.cache_clear()
+    with pytest.warns(RuntimeWarning, match="no C\\+\\+ compiler"):
+        assert native.load() is None
+    monkeypatch.setenv("CXX", "false")  # found, but every invocation fails
+    native.load.cache_clear()
+    with pytest.warns(RuntimeWarning, match="compiling peephole.cpp failed"):
+        assert native.load() is None
+    assert list(tmp_path.iterdir()) == [], "a failed build leaves nothing behind"
+    native.load.cache_clear()
+    torch.manual_seed(0)
+    layer = PeepholeLSTM(3, 4)
+    with pytest.warns(RuntimeWarning):
+        out, _ = layer(torch.randn(2, 5, 3))  # still runs, on the PyTorch loop
+    assert out.shape == (2, 5, 4)
+    native.load.cache_clear()  # later tests load the real kernel again

@@ -45,15 +45,17 @@ def key(obj: Any, length: int = 16) -> str:
 
 
 def source_hash(*module_names: str) -> str:
-    """Hash of the source files of the named ``study`` modules (``"synth"``), or of all of them.
+    """Hash of the source files of the named ``study`` modules (``"synth"``, or a file such as
+    ``"peephole.cpp"``), or of all of them (every ``.py`` and ``.cpp`` file of the package).
 
     Part of every cache key, so a change to the code that made a file makes a new file.
     """
-    names = module_names or tuple(sorted(p.stem for p in PACKAGE_DIR.glob("*.py")))
+    names = module_names or tuple(sorted(p.stem if p.suffix == ".py" else p.name for p in PACKAGE_DIR.iterdir()
+                                         if p.suffix in (".py", ".cpp")))
     h = hashlib.sha256()
     for name in names:
         h.update(name.encode())
-        h.update((PACKAGE_DIR / f"{name}.py").read_bytes())
+        h.update((PACKAGE_DIR / (name if "." in name else f"{name}.py")).read_bytes())
     return h.hexdigest()[:16]
 
 

@@ -34,7 +34,7 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from study import baseline, cache, train
+from study import baseline, cache, native, train
 from study.data import Dataset
 from study.errors import ConfigError
 from study.train import TrainConfig
@@ -122,7 +122,8 @@ def run_key(dataset: Dataset, cfg: TrainConfig, test: bool) -> str:
     """The cache key of one trained run."""
     return cache.key({
         "format": RUN_FORMAT, "data": dataset.key, "config": dataclasses.asdict(cfg), "test": test,
-        "code": cache.source_hash("model", "train"), "torch": torch.__version__,
+        "code": cache.source_hash("model", "train", "native", "peephole.cpp"), "torch": torch.__version__,
+        "backend": native.backend(),  # the compiled and the PyTorch time loop round differently
     })
 
 

@@ -22,12 +22,14 @@ Shapes: B batch, T frames, D input dims (1 for Z, 3 for XYZ), H hidden units, L 
 
 from __future__ import annotations
 
+import ctypes
 import math
 
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from study import native
 from study.errors import ConfigError
 
 CELLS = ("peephole", "lstm", "gru")
@@ -111,19 +113,114 @@ def _recurrence(
     return gates, cs, hs, tcs
 
 
+def _time_major_grad(d_out: torch.Tensor | None, like: torch.Tensor, T: int, B: int, H: int) -> torch.Tensor:
+    """Our own contiguous time-major (T, B, H) copy of dL/dh_t from above (the loops add into it)."""
+    if d_out is None:
+        return like.new_zeros(T, B, H)
+    return d_out.transpose(0, 1).clone(memory_format=torch.contiguous_format)
+
+
+def _backward_loop(
+    d_out: torch.Tensor | None, d_h: torch.Tensor | None, d_c: torch.Tensor | None, gates: torch.Tensor,
+    cs: torch.Tensor, hs: torch.Tensor, tcs: torch.Tensor, weight_hh: torch.Tensor,
+    w_ci: torch.Tensor, w_cf: torch.Tensor, w_co: torch.Tensor,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """The backward time loop as PyTorch operations (five kernels per step): returns dL/d(pre-activations)
+    (T, B, 4H) and dL/d(h0, c0), each (B, H). Used where the compiled loop is not available."""
+    T, B, H4 = gates.shape
+    H = H4 // 4
+    i, f, g, o = gates.view(T, B, 4, H).unbind(2)  # each (T, B, H)
+    c_old, h = cs[:-1], hs[1:]
+    # Derivative factors for all steps at once, each written with as few passes over (T, B, H) as
+    # possible (sigmoid' = s - s^2, and o * tanh(c) is h itself):
+    a_o = torch.addcmul(h, h, o, value=-1)  # o tanh(c) (1 - o):  dL/d(o pre-activation) = dh * a_o
+    b_c = torch.addcmul(o, h, tcs, value=-1).addcmul_(a_o, w_co)  # dc_t += dh * b_c (w_co path included)
+    k_ifg = gates.new_empty(T, B, 3, H)  # dL/d(i, f, g pre-activations) = dc_t * k_ifg
+    k_i, k_f, k_g = k_ifg.unbind(2)
+    torch.addcmul(i, i, i, value=-1, out=k_i).mul_(g)  # g i (1 - i)
+    torch.addcmul(f, f, f, value=-1, out=k_f).mul_(c_old)  # c_{t-1} f (1 - f)
+    torch.addcmul(torch.ones_like(w_ci), g, g, value=-1, out=k_g).mul_(i)  # i (1 - g^2)
+    f_c = torch.addcmul(f, k_i, w_ci).addcmul_(k_f, w_cf)  # dL/dc_{t-1} = dc_t * f_c
+    d_out = _time_major_grad(d_out, gates, T, B, H)  # the recurrent matmul adds into it in place
+    dh = d_out[-1] + d_h if d_h is not None else d_out[-1].clone()
+    dc = d_c.clone() if d_c is not None else gates.new_zeros(B, H)
+    d_gates = torch.empty_like(gates)  # (T, B, 4H) gradients of the pre-activations
+    dg4 = d_gates.view(T, B, 4, H)
+    steps = zip(d_gates.unbind(0), dg4[:, :, :3].unbind(0), dg4[:, :, 3].unbind(0),
+                a_o.unbind(0), b_c.unbind(0), k_ifg.unbind(0), f_c.unbind(0))
+    for t, (dg, dg_ifg, dg_o, a_o_t, b_c_t, k_t, f_c_t) in reversed(list(enumerate(steps))):
+        torch.mul(dh, a_o_t, out=dg_o)
+        dc.addcmul_(dh, b_c_t)  # total dL/dc_t
+        torch.mul(dc.unsqueeze(1), k_t, out=dg_ifg)
+        dc.mul_(f_c_t)  # dL/dc_{t-1}
+        dh = d_out[t - 1].addmm_(dg, weight_hh) if t else torch.mm(dg, weight_hh)
+    return d_gates, dh, dc
+
+
+def _native_for(xw: torch.Tensor) -> native.Native | None:
+    """The compiled loop if it can run on ``xw`` (CPU, float32 or float64), else ``None``."""
+    if xw.device.type != "cpu" or xw.dtype not in (torch.float32, torch.float64):
+        return None
+    return native.active()
+
+
+def _ptr(t: torch.Tensor) -> ctypes.c_void_p:
+    return ctypes.c_void_p(t.data_ptr())
+
+
+def _recurrence_native(
+    lib: native.Native, xw: torch.Tensor, h0: torch.Tensor, c0: torch.Tensor, weight_hh: torch.Tensor,
+    w_ci: torch.Tensor, w_cf: torch.Tensor, w_co: torch.Tensor,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """:func:`_recurrence` in ``peephole.cpp``: one BLAS call and one fused loop per step; same outputs."""
+    T, B, H4 = xw.shape
+    H = H4 // 4
+    cs = xw.new_empty(T + 1, B, H)
+    hs = xw.new_empty(T + 1, B, H)
+    tcs = xw.new_empty(T, B, H)
+    cs[0], hs[0] = c0, h0
+    w = [t.detach().contiguous() for t in (weight_hh, w_ci, w_cf, w_co)]
+    lib.forward[xw.dtype](T, B, H, _ptr(xw), *map(_ptr, w), _ptr(cs), _ptr(hs), _ptr(tcs), lib.blas[xw.dtype])
+    return xw, cs, hs, tcs
+
+
+def _backward_native(
+    lib: native.Native, d_out: torch.Tensor | None, d_h: torch.Tensor | None, d_c: torch.Tensor | None,
+    gates: torch.Tensor, cs: torch.Tensor, tcs: torch.Tensor, weight_hh: torch.Tensor,
+    w_ci: torch.Tensor, w_cf: torch.Tensor, w_co: torch.Tensor,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """:func:`_backward_loop` in ``peephole.cpp`` (derivative factors computed inside the fused loop)."""
+    T, B, H4 = gates.shape
+    H = H4 // 4
+    d_out = _time_major_grad(d_out, gates, T, B, H)
+    dh = d_h.clone(memory_format=torch.contiguous_format) if d_h is not None else gates.new_zeros(B, H)
+    dc = d_c.clone(memory_format=torch.contiguous_format) if d_c is not None else gates.new_zeros(B, H)
+    d_gates = torch.empty_like(gates)
+    w = [t.detach().contiguous() for t in (weight_hh, w_ci, w_cf, w_co)]
+    lib.backward[gates.dtype](T, B, H, _ptr(gates), _ptr(cs), _ptr(tcs), *map(_ptr, w), _ptr(d_out), _ptr(dh),
+                              _ptr(dc), _ptr(d_gates), lib.blas[gates.dtype])
+    return d_gates, dh, dc
+
+
 class PeepholeFunction(torch.autograd.Function):
     """The peephole LSTM layer with a hand-written backward pass (what makes it as fast as ``nn.LSTM``).
 
-    Forward runs :func:`_recurrence` without building an autograd graph. Backward walks the time steps
-    once in reverse with a handful of kernels per step, using gate derivatives precomputed for all
-    steps at once; the weight gradients are then single matrix products over all time steps.
-    Checked against :func:`peephole_reference` and ``torch.autograd.gradcheck`` in the tests.
+    Forward runs the time loop without building an autograd graph; backward walks the steps once in
+    reverse. On CPU both loops are the compiled ones of ``peephole.cpp`` (:mod:`study.native`: one BLAS
+    call and one fused elementwise pass per step), else :func:`_recurrence` and :func:`_backward_loop`
+    in PyTorch operations. The weight gradients are then single matrix products over all time steps.
+    Both paths are checked against :func:`peephole_reference` and ``torch.autograd.gradcheck`` in the tests.
     """
 
     @staticmethod
     def forward(ctx, x, h0, c0, weight_ih, weight_hh, bias, w_ci, w_cf, w_co):  # type: ignore[override]
-        xw = F.linear(x.transpose(0, 1), weight_ih, bias)  # (T, B, 4H), one matmul for all t
-        gates, cs, hs, tcs = _recurrence(xw, h0, c0, weight_hh, torch.stack((w_ci, w_cf)), w_co)
+        xw = F.linear(x.transpose(0, 1), weight_ih, bias).contiguous()  # (T, B, 4H), one matmul for all t
+        lib = _native_for(xw)
+        if lib is not None:
+            gates, cs, hs, tcs = _recurrence_native(lib, xw, h0, c0, weight_hh, w_ci, w_cf, w_co)
+        else:
+            gates, cs, hs, tcs = _recurrence(xw, h0, c0, weight_hh, torch.stack((w_ci, w_cf)), w_co)
+        ctx.native = lib
         ctx.save_for_backward(x, weight_ih, weight_hh, w_ci, w_cf, w_co, gates, cs, hs, tcs)
         out = hs[1:].transpose(0, 1)  # (B, T, H)
         return out, hs[-1].clone(), cs[-1].clone()
@@ -133,32 +230,11 @@ class PeepholeFunction(torch.autograd.Function):
         x, weight_ih, weight_hh, w_ci, w_cf, w_co, gates, cs, hs, tcs = ctx.saved_tensors
         T, B, H4 = gates.shape
         H = H4 // 4
-        i, f, g, o = gates.view(T, B, 4, H).unbind(2)  # each (T, B, H)
-        c_old, h = cs[:-1], hs[1:]
-        # Derivative factors for all steps at once, each written with as few passes over (T, B, H) as
-        # possible (sigmoid' = s - s^2, and o * tanh(c) is h itself):
-        a_o = torch.addcmul(h, h, o, value=-1)  # o tanh(c) (1 - o):  dL/d(o pre-activation) = dh * a_o
-        b_c = torch.addcmul(o, h, tcs, value=-1).addcmul_(a_o, w_co)  # dc_t += dh * b_c (w_co path included)
-        k_ifg = x.new_empty(T, B, 3, H)  # dL/d(i, f, g pre-activations) = dc_t * k_ifg
-        k_i, k_f, k_g = k_ifg.unbind(2)
-        torch.addcmul(i, i, i, value=-1, out=k_i).mul_(g)  # g i (1 - i)
-        torch.addcmul(f, f, f, value=-1, out=k_f).mul_(c_old)  # c_{t-1} f (1 - f)
-        torch.addcmul(torch.ones_like(w_ci), g, g, value=-1, out=k_g).mul_(i)  # i (1 - g^2)
-        f_c = torch.addcmul(f, k_i, w_ci).addcmul_(k_f, w_cf)  # dL/dc_{t-1} = dc_t * f_c
-        # Our own time-major copy of dL/dh_t from above: the recurrent matmul adds into it in place.
-        d_out = x.new_zeros(T, B, H) if d_out is None else d_out.transpose(0, 1).clone(memory_format=torch.contiguous_format)
-        dh = d_out[-1] + d_h if d_h is not None else d_out[-1].clone()
-        dc = d_c.clone() if d_c is not None else x.new_zeros(B, H)
-        d_gates = torch.empty_like(gates)  # (T, B, 4H) gradients of the pre-activations
+        if ctx.native is not None:
+            d_gates, dh, dc = _backward_native(ctx.native, d_out, d_h, d_c, gates, cs, tcs, weight_hh, w_ci, w_cf, w_co)
+        else:
+            d_gates, dh, dc = _backward_loop(d_out, d_h, d_c, gates, cs, hs, tcs, weight_hh, w_ci, w_cf, w_co)
         dg4 = d_gates.view(T, B, 4, H)
-        steps = zip(d_gates.unbind(0), dg4[:, :, :3].unbind(0), dg4[:, :, 3].unbind(0),
-                    a_o.unbind(0), b_c.unbind(0), k_ifg.unbind(0), f_c.unbind(0))
-        for t, (dg, dg_ifg, dg_o, a_o_t, b_c_t, k_t, f_c_t) in reversed(list(enumerate(steps))):
-            torch.mul(dh, a_o_t, out=dg_o)
-            dc.addcmul_(dh, b_c_t)  # total dL/dc_t
-            torch.mul(dc.unsqueeze(1), k_t, out=dg_ifg)
-            dc.mul_(f_c_t)  # dL/dc_{t-1}
-            dh = d_out[t - 1].addmm_(dg, weight_hh) if t else torch.mm(dg, weight_hh)
         flat = d_gates.reshape(T * B, H4)
         need = ctx.needs_input_grad
         dx = (d_gates @ weight_ih).transpose(0, 1) if need[0] else None  # (B, T, D)
@@ -170,6 +246,7 @@ class PeepholeFunction(torch.autograd.Function):
         d_w_hh = d_w[:, D:].contiguous() if need[4] else None
         d_bias = flat.sum(0) if need[5] else None
         dgi, dgf, _, dgo = dg4.unbind(2)
+        c_old = cs[:-1]
         d_w_ci = (dgi * c_old).sum((0, 1))
         d_w_cf = (dgf * c_old).sum((0, 1))
         d_w_co = (dgo * cs[1:]).sum((0, 1))

@@ -36,7 +36,7 @@ import torch
 import torch.nn.functional as F
 from tqdm import tqdm
 
-from study import CLASSES
+from study import CLASSES, native
 from study.data import Dataset, Split
 from study.errors import ConfigError, ModelError, TrajectoryError, check_range
 from study.model import CELLS, Classifier
@@ -180,7 +180,8 @@ class TrainedModel:
                 "normalisation.json": {"dims": self.dims, "std": self.net.scale.tolist()},
                 "history.json": {"best_epoch": self.best_epoch, "epochs": self.history},
                 "meta.json": {"format": FORMAT, "fps": self.fps, "data_key": self.data_key,
-                              "n_frames": self.n_frames, "classes": list(CLASSES), "torch": torch.__version__},
+                              "n_frames": self.n_frames, "classes": list(CLASSES), "torch": torch.__version__,
+                              "backend": native.backend()},
             }
             for name, obj in texts.items():
                 (tmp / name).write_text(json.dumps(obj, indent=1) + "\n")

@@ -1,0 +1,150 @@
+"""The compiled time loop of the peephole LSTM (``peephole.cpp``): built on first use, loaded with ctypes.
+
+Why: one time step of the layer is one small matrix product and a dozen elementwise operations; as
+PyTorch kernels each costs a few microseconds of dispatch, which at batch 32 is most of the training
+time. ``peephole.cpp`` does a step's elementwise work in one fused, vectorised loop and hands the
+matrix product to PyTorch's own BLAS (``sgemm_``/``dgemm_`` of ``libtorch_cpu``).
+
+The library is compiled with the system C++ compiler (``$CXX``, else ``g++``; about a second, no
+PyTorch headers) into a folder keyed by the source, the compiler, the flags and this CPU, written
+atomically. Without a compiler, or with ``STUDY_NATIVE=0``, :func:`load` returns ``None`` and
+``study.model`` runs the same loop as PyTorch operations (slower; last-bit rounding differs, so the
+backend is part of every training run's cache key: :func:`backend`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import hashlib
+import os
+import platform
+import shutil
+import subprocess
+import tempfile
+import warnings
+from collections.abc import Iterator
+from functools import lru_cache
+from pathlib import Path
+
+import torch
+
+SOURCE = Path(__file__).resolve().parent / "peephole.cpp"
+FLAGS = ["-O3", "-march=native", "-fno-math-errno", "-fno-trapping-math", "-ffp-contract=fast", "-fPIC", "-shared", "-std=c++17"]
+"""Compiler flags: ``-march=native`` lets the loops use this CPU's vector width (hence the CPU in the key)."""
+
+
+class Native:
+    """The loaded library: its four entry points and the BLAS routine pointers they call."""
+
+    def __init__(self, lib: ctypes.CDLL, sgemm: int, dgemm: int, path: Path) -> None:
+        self.lib, self.path = lib, path
+        self.blas = {torch.float32: ctypes.c_void_p(sgemm), torch.float64: ctypes.c_void_p(dgemm)}
+        self.forward = {torch.float32: lib.peephole_forward_f32, torch.float64: lib.peephole_forward_f64}
+        self.backward = {torch.float32: lib.peephole_backward_f32, torch.float64: lib.peephole_backward_f64}
+        for fn in (*self.forward.values(), *self.backward.values()):
+            fn.restype = None
+
+
+def cache_dir() -> Path:
+    """Where compiled libraries live: ``$STUDY_NATIVE_DIR``, else ``~/.cache/study/native``."""
+    env = os.environ.get("STUDY_NATIVE_DIR")
+    return Path(env) if env else Path.home() / ".cache" / "study" / "native"
+
+
+def _cpu() -> str:
+    try:
+        lines = Path("/proc/cpuinfo").read_text().splitlines()
+        return "\n".join(sorted({ln for ln in lines if ln.startswith(("model name", "flags"))}))
+    except OSError:
+        return platform.processor() or platform.machine()
+
+
+def _compiler() -> tuple[str, str] | None:
+    cxx = shutil.which(os.environ.get("CXX", "g++"))
+    if cxx is None:
+        return None
+    try:
+        version = subprocess.run([cxx, "--version"], capture_output=True, text=True, timeout=30).stdout
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return cxx, version
+
+
+def _blas() -> tuple[int, int] | None:
+    """Addresses of PyTorch's own ``sgemm_`` and ``dgemm_`` (Fortran BLAS interface), if exported."""
+    lib_dir = Path(torch.__file__).resolve().parent / "lib"
+    for name in ("libtorch_cpu.so", "libtorch_cpu.dylib"):
+        if (lib_dir / name).is_file():
+            try:
+                torch_lib = ctypes.CDLL(str(lib_dir / name))
+                return (ctypes.cast(torch_lib.sgemm_, ctypes.c_void_p).value,
+                        ctypes.cast(torch_lib.dgemm_, ctypes.c_void_p).value)
+            except (OSError, AttributeError):
+                return None
+    return None
+
+
+def _build(cxx: str, version: str) -> Path:
+    source = SOURCE.read_bytes()
+    key = hashlib.sha256(b"\0".join([source, version.encode(), " ".join(FLAGS).encode(), _cpu().encode(),
+                                     platform.machine().encode()])).hexdigest()[:16]
+    target = cache_dir() / f"peephole-{key}.so"
+    if target.is_file():
+        return target
+    target.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=".so", dir=target.parent)
+    os.close(fd)
+    try:
+        subprocess.run([cxx, *FLAGS, str(SOURCE), "-o", tmp], check=True, capture_output=True, text=True, timeout=300)
+        os.replace(tmp, target)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return target
+
+
+@lru_cache(maxsize=1)
+def load() -> Native | None:
+    """The compiled kernel, building it if needed; ``None`` (with one warning) where it cannot be had."""
+    if os.environ.get("STUDY_NATIVE", "1") == "0":
+        return None
+    blas = _blas()
+    compiler = _compiler()
+    if blas is None or compiler is None:
+        why = "PyTorch's BLAS routines are not exported" if blas is None else "no C++ compiler (set CXX or install g++)"
+        warnings.warn(f"peephole LSTM: using the slower PyTorch loop: {why}", RuntimeWarning, stacklevel=2)
+        return None
+    try:
+        path = _build(*compiler)
+        return Native(ctypes.CDLL(str(path)), *blas, path)
+    except (OSError, subprocess.SubprocessError) as err:
+        detail = getattr(err, "stderr", "") or str(err)
+        warnings.warn(f"peephole LSTM: using the slower PyTorch loop: compiling {SOURCE.name} failed: {detail}",
+                      RuntimeWarning, stacklevel=2)
+        return None
+
+
+_disabled = False
+
+
+@contextlib.contextmanager
+def disabled() -> Iterator[None]:
+    """Within the block ``study.model`` runs the PyTorch loop even where the compiled one exists
+    (for benchmarks that compare the two in one run)."""
+    global _disabled
+    before, _disabled = _disabled, True
+    try:
+        yield
+    finally:
+        _disabled = before
+
+
+def active() -> Native | None:
+    """The compiled kernel if it is available and not :func:`disabled`, else ``None``."""
+    return None if _disabled else load()
+
+
+def backend() -> str:
+    """``'native'`` when the compiled loop is used, else ``'torch'``: part of training cache keys."""
+    return "native" if active() is not None else "torch"

@@ -1,0 +1,162 @@
+// One peephole LSTM layer's time loop, forward and backward, for study.model.PeepholeFunction.
+//
+// Compiled on first use by study/native.py (plain C++, no PyTorch headers, about a second) and called
+// through ctypes with raw pointers to contiguous, time-major tensors. The recurrent matrix products
+// go to the BLAS that PyTorch itself uses (its sgemm_/dgemm_, passed in as a function pointer); all
+// the elementwise work of a step is one fused loop, instead of ten PyTorch kernels per step.
+//
+// Layout (row-major, as the PyTorch tensors): gates (T, B, 4H) in the order i, f, g, o; cell and
+// hidden states (T + 1, B, H) with index 0 holding the initial state; weight_hh (4H, H).
+// Gates (Gers et al. 2002, Sak et al. 2014; diagonal peepholes w_ci, w_cf, w_co):
+//   i = s(W_i x + R_i h + w_ci c_old + b_i)    f = s(... + w_cf c_old)    g = tanh(...)
+//   c = f c_old + i g                           o = s(... + w_co c)       h = o tanh(c)
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+typedef void (*sgemm_t)(const char*, const char*, const int*, const int*, const int*, const float*,
+                        const float*, const int*, const float*, const int*, const float*, float*, const int*);
+typedef void (*dgemm_t)(const char*, const char*, const int*, const int*, const int*, const double*,
+                        const double*, const int*, const double*, const int*, const double*, double*,
+                        const int*);
+
+static inline void gemm(void* f, const char* ta, const char* tb, int m, int n, int k, float alpha,
+                        const float* a, int lda, const float* b, int ldb, float beta, float* c, int ldc) {
+  ((sgemm_t)f)(ta, tb, &m, &n, &k, &alpha, a, &lda, b, &ldb, &beta, c, &ldc);
+}
+static inline void gemm(void* f, const char* ta, const char* tb, int m, int n, int k, double alpha,
+                        const double* a, int lda, const double* b, int ldb, double beta, double* c, int ldc) {
+  ((dgemm_t)f)(ta, tb, &m, &n, &k, &alpha, a, &lda, b, &ldb, &beta, c, &ldc);
+}
+
+// exp for float in a form the compiler vectorises: e^x = 2^n e^r, |r| <= ln2 / 2, with Cephes' expf
+// polynomial (relative error about 1e-7); n is rounded with the 1.5 * 2^23 trick, so no libm call.
+static inline float exp_(float x) {
+  x = x < -87.0f ? -87.0f : (x > 88.0f ? 88.0f : x);
+  const float shifted = x * 1.44269504088896341f + 12582912.0f;
+  const float n = shifted - 12582912.0f;
+  int32_t bits;
+  std::memcpy(&bits, &shifted, 4);
+  const int32_t scale_bits = ((bits - 0x4B400000) + 127) << 23;
+  float scale;
+  std::memcpy(&scale, &scale_bits, 4);
+  float r = x - n * 0.693359375f;
+  r = r + n * 2.12194440e-4f;
+  float p = 1.9875691500e-4f;
+  p = p * r + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  return (p * r * r + r + 1.0f) * scale;
+}
+static inline double exp_(double x) { return std::exp(x); }  // float64 is for tests: exact libm
+
+template <typename R> static inline R sigmoid_(R x) { return R(1) / (R(1) + exp_(-x)); }
+template <typename R> static inline R tanh_(R x) { return R(1) - R(2) / (exp_(R(2) * x) + R(1)); }
+
+template <typename R>
+static void forward(int T, int B, int H, R* gates, const R* w_hh, const R* w_ci, const R* w_cf,
+                    const R* w_co, R* cs, R* hs, R* tcs, void* blas) {
+  const int H4 = 4 * H;
+  for (int t = 0; t < T; ++t) {
+    R* G = gates + (int64_t)t * B * H4;
+    const R* h_old = hs + (int64_t)t * B * H;
+    // G (B, 4H) += h_old (B, H) @ w_hh^T, written column-major: G^T = w_hh h_old^T + G^T.
+    gemm(blas, "T", "N", H4, B, H, R(1), w_hh, H, h_old, H, R(1), G, H4);
+    for (int b = 0; b < B; ++b) {
+      R* g = G + (int64_t)b * H4;
+      const int64_t row = ((int64_t)t * B + b) * H;
+      const R* c_old = cs + row;
+      R* c_new = cs + row + (int64_t)B * H;
+      R* h_new = hs + row + (int64_t)B * H;
+      R* tc = tcs + row;
+#pragma GCC ivdep
+      for (int j = 0; j < H; ++j) {
+        const R ci = c_old[j];
+        const R i = sigmoid_(g[j] + w_ci[j] * ci);
+        const R f = sigmoid_(g[H + j] + w_cf[j] * ci);
+        const R gg = tanh_(g[2 * H + j]);
+        const R c = f * ci + i * gg;
+        const R o = sigmoid_(g[3 * H + j] + w_co[j] * c);
+        const R tcv = tanh_(c);
+        g[j] = i;
+        g[H + j] = f;
+        g[2 * H + j] = gg;
+        g[3 * H + j] = o;
+        c_new[j] = c;
+        tc[j] = tcv;
+        h_new[j] = o * tcv;
+      }
+    }
+  }
+}
+
+// d_out (T, B, H): dL/dh_t from above, time-major; overwritten (the recurrent products add into it).
+// dh0, dc0 (B, H): in: dL/d(final h, c); out: dL/d(h0, c0). d_gates (T, B, 4H): out, dL/d(pre-activations).
+template <typename R>
+static void backward(int T, int B, int H, const R* gates, const R* cs, const R* tcs, const R* w_hh,
+                     const R* w_ci, const R* w_cf, const R* w_co, R* d_out, R* dh0, R* dc0, R* d_gates,
+                     void* blas) {
+  const int H4 = 4 * H;
+  const int64_t BH = (int64_t)B * H;
+  R* dc = dc0;  // running dL/dc, updated in place step by step
+  if (T > 0) {
+    R* last = d_out + (T - 1) * BH;
+    for (int64_t k = 0; k < BH; ++k) last[k] += dh0[k];
+  }
+  for (int t = T - 1; t >= 0; --t) {
+    const R* dh = d_out + t * BH;
+    const R* G = gates + (int64_t)t * B * H4;
+    R* dG = d_gates + (int64_t)t * B * H4;
+    for (int b = 0; b < B; ++b) {
+      const R* g = G + (int64_t)b * H4;
+      R* dg = dG + (int64_t)b * H4;
+      const int64_t row = (int64_t)t * BH + (int64_t)b * H;
+      const R* c_old = cs + row;
+      const R* tc = tcs + row;
+      const R* dhb = dh + (int64_t)b * H;
+      R* dcb = dc + (int64_t)b * H;
+#pragma GCC ivdep
+      for (int j = 0; j < H; ++j) {
+        const R i = g[j], f = g[H + j], gg = g[2 * H + j], o = g[3 * H + j];
+        const R tcv = tc[j], dhv = dhb[j];
+        const R dgo = dhv * tcv * o * (R(1) - o);
+        const R dcv = dcb[j] + dhv * o * (R(1) - tcv * tcv) + dgo * w_co[j];
+        const R dgi = dcv * gg * i * (R(1) - i);
+        const R dgf = dcv * c_old[j] * f * (R(1) - f);
+        dg[j] = dgi;
+        dg[H + j] = dgf;
+        dg[2 * H + j] = dcv * i * (R(1) - gg * gg);
+        dg[3 * H + j] = dgo;
+        dcb[j] = dcv * f + dgi * w_ci[j] + dgf * w_cf[j];
+      }
+    }
+    // dL/dh_{t-1} = d_out[t-1] + dG (B, 4H) @ w_hh (4H, H); column-major: w_hh^T-as-stored times dG^T.
+    R* target = t > 0 ? d_out + (t - 1) * BH : dh0;
+    gemm(blas, "N", "N", H, B, H4, R(1), w_hh, H, dG, H4, t > 0 ? R(1) : R(0), target, H);
+  }
+}
+
+extern "C" {
+void peephole_forward_f32(int T, int B, int H, float* gates, const float* w_hh, const float* w_ci,
+                          const float* w_cf, const float* w_co, float* cs, float* hs, float* tcs, void* blas) {
+  forward<float>(T, B, H, gates, w_hh, w_ci, w_cf, w_co, cs, hs, tcs, blas);
+}
+void peephole_forward_f64(int T, int B, int H, double* gates, const double* w_hh, const double* w_ci,
+                          const double* w_cf, const double* w_co, double* cs, double* hs, double* tcs,
+                          void* blas) {
+  forward<double>(T, B, H, gates, w_hh, w_ci, w_cf, w_co, cs, hs, tcs, blas);
+}
+void peephole_backward_f32(int T, int B, int H, const float* gates, const float* cs, const float* tcs,
+                           const float* w_hh, const float* w_ci, const float* w_cf, const float* w_co,
+                           float* d_out, float* dh0, float* dc0, float* d_gates, void* blas) {
+  backward<float>(T, B, H, gates, cs, tcs, w_hh, w_ci, w_cf, w_co, d_out, dh0, dc0, d_gates, blas);
+}
+void peephole_backward_f64(int T, int B, int H, const double* gates, const double* cs, const double* tcs,
+                           const double* w_hh, const double* w_ci, const double* w_cf, const double* w_co,
+                           double* d_out, double* dh0, double* dc0, double* d_gates, void* blas) {
+  backward<double>(T, B, H, gates, cs, tcs, w_hh, w_ci, w_cf, w_co, d_out, dh0, dc0, d_gates, blas);
+}
+}
