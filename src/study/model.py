@@ -179,7 +179,7 @@ def _recurrence_native(
     hs = xw.new_empty(T + 1, B, H)
     tcs = xw.new_empty(T, B, H)
     cs[0], hs[0] = c0, h0
-    w = [t.detach().contiguous() for t in (weight_hh, w_ci, w_cf, w_co)]
+    w = [t.detach().contiguous() for t in (weight_hh.t(), w_ci, w_cf, w_co)]  # weight_hh transposed: (H, 4H)
     lib.forward[xw.dtype](T, B, H, _ptr(xw), *map(_ptr, w), _ptr(cs), _ptr(hs), _ptr(tcs), lib.blas[xw.dtype])
     return xw, cs, hs, tcs
 

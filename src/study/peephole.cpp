@@ -57,14 +57,15 @@ template <typename R> static inline R sigmoid_(R x) { return R(1) / (R(1) + exp_
 template <typename R> static inline R tanh_(R x) { return R(1) - R(2) / (exp_(R(2) * x) + R(1)); }
 
 template <typename R>
-static void forward(int T, int B, int H, R* gates, const R* w_hh, const R* w_ci, const R* w_cf,
+static void forward(int T, int B, int H, R* gates, const R* w_hh_t, const R* w_ci, const R* w_cf,
                     const R* w_co, R* cs, R* hs, R* tcs, void* blas) {
   const int H4 = 4 * H;
   for (int t = 0; t < T; ++t) {
     R* G = gates + (int64_t)t * B * H4;
     const R* h_old = hs + (int64_t)t * B * H;
-    // G (B, 4H) += h_old (B, H) @ w_hh^T, written column-major: G^T = w_hh h_old^T + G^T.
-    gemm(blas, "T", "N", H4, B, H, R(1), w_hh, H, h_old, H, R(1), G, H4);
+    // G (B, 4H) += h_old (B, H) @ w_hh_t (H, 4H); column-major that is G^T += w_hh_t^T h_old^T, and
+    // BLAS reads the row-major w_hh_t as that transpose without copying.
+    gemm(blas, "N", "N", H4, B, H, R(1), w_hh_t, H4, h_old, H, R(1), G, H4);
     for (int b = 0; b < B; ++b) {
       R* g = G + (int64_t)b * H4;
       const int64_t row = ((int64_t)t * B + b) * H;
@@ -140,14 +141,14 @@ static void backward(int T, int B, int H, const R* gates, const R* cs, const R* 
 }
 
 extern "C" {
-void peephole_forward_f32(int T, int B, int H, float* gates, const float* w_hh, const float* w_ci,
+void peephole_forward_f32(int T, int B, int H, float* gates, const float* w_hh_t, const float* w_ci,
                           const float* w_cf, const float* w_co, float* cs, float* hs, float* tcs, void* blas) {
-  forward<float>(T, B, H, gates, w_hh, w_ci, w_cf, w_co, cs, hs, tcs, blas);
+  forward<float>(T, B, H, gates, w_hh_t, w_ci, w_cf, w_co, cs, hs, tcs, blas);
 }
-void peephole_forward_f64(int T, int B, int H, double* gates, const double* w_hh, const double* w_ci,
+void peephole_forward_f64(int T, int B, int H, double* gates, const double* w_hh_t, const double* w_ci,
                           const double* w_cf, const double* w_co, double* cs, double* hs, double* tcs,
                           void* blas) {
-  forward<double>(T, B, H, gates, w_hh, w_ci, w_cf, w_co, cs, hs, tcs, blas);
+  forward<double>(T, B, H, gates, w_hh_t, w_ci, w_cf, w_co, cs, hs, tcs, blas);
 }
 void peephole_backward_f32(int T, int B, int H, const float* gates, const float* cs, const float* tcs,
                            const float* w_hh, const float* w_ci, const float* w_cf, const float* w_co,
