@@ -186,6 +186,8 @@ def _runs(dataset: Dataset, cfgs: list[TrainConfig], data_dir: str | Path, test:
     """
     records = [cached(dataset, c, data_dir, test) for c in cfgs]
     todo = [i for i, r in enumerate(records) if r is None]
+    # Longest inputs first, so the last runs to finish are short ones and no core idles long at the end.
+    todo.sort(key=lambda i: -cfgs[i].n_frames(dataset.fps))
     with tqdm(total=len(todo), desc=desc, disable=not progress or not todo) as bar:
         if workers > 1 and len(todo) > 1:
             ctx = multiprocessing.get_context("spawn")  # no fork of a process that holds torch threads
