@@ -308,7 +308,7 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedMod
     with deterministic(cfg.seed):
         net = Classifier(x.shape[2], cfg.hidden, cfg.layers, cfg.dropout, cfg.cell)
         net.set_scale(torch.from_numpy(std).float())
-        opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+        opt = torch.optim.Adam(net.parameters(), lr=cfg.lr, foreach=True)  # one kernel per update op for all tensors
         history: list[dict[str, float]] = []
         best_loss, best_epoch, best_state = math.inf, 0, copy.deepcopy(net.state_dict())
         bar = tqdm(range(cfg.max_epochs), desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
