@@ -1,12 +1,15 @@
 """The simulation settings checked against physics (see the data chapter for the same checks as figures)."""
 
+import dataclasses
 import math
 
+import mujoco
 import numpy as np
 import pytest
 
 from study import checks, synth
 from study.contact import penetration_bound
+from study.errors import ConfigError
 
 
 def test_free_flight_follows_the_parabola(smoke_cfg):
@@ -87,3 +90,43 @@ def test_energy_never_rises_between_flights_with_friction(traces):
     for tr in ts:
         e = tr.flight_energies()
         assert np.all(np.diff(e) <= 1e-3 * e[0]), e
+
+
+@pytest.fixture(scope="module")
+def sleep_sample(smoke_cfg):
+    """Eight light and eight heavy 3 s throws, simulated with the default sleep tolerance and awake."""
+    return checks.sleep_effect(smoke_cfg, synth.sample_split(smoke_cfg, 0, "train"), range(16))
+
+
+def test_sleeping_changes_nothing_before_an_object_has_come_to_rest(sleep_sample):
+    """Asleep and awake runs are bitwise equal until the awake object is at rest; after it, within 1 cm."""
+    r = sleep_sample
+    assert np.isfinite(r["first_diff"]).sum() >= 4  # objects did fall asleep, so the comparison means something
+    assert np.all(np.isnan(r["first_diff"]) | (r["first_diff"] >= r["time_to_rest"])), (r["first_diff"], r["time_to_rest"])
+    assert r["max_diff"].max() < 0.01
+
+
+def test_a_sleeping_object_stays_exactly_where_it_lies(smoke_cfg):
+    """Heavy throws at rest: with sleep the last 10 frames are identical; awake, the object still creeps."""
+    params = synth.sample_split(smoke_cfg, 0, "train")
+    heavy = {k: v[8:12] for k, v in params.items()}
+    for cfg, frozen in ((smoke_cfg, True), (smoke_cfg.replace(sleep_tolerance=0.0), False)):
+        x = synth.simulate(cfg, heavy, threads=1, progress=False)
+        still = [bool(np.all(x[i, -10:] == x[i, -1])) for i in range(len(x))]
+        assert still == [frozen] * len(x), (cfg.sleep_tolerance, still)
+
+
+def test_the_sleep_tolerance_limit_keeps_thrown_objects_awake_at_their_apex(smoke_cfg):
+    """MuJoCo sleeps a body in mid-air too: a spinless vertical toss freezes at its apex above the allowed
+    tolerance (built unvalidated here), and not at the largest tolerance the config allows."""
+    limit = smoke_cfg.max_sleep_tolerance
+    smoke_cfg.replace(sleep_tolerance=limit)  # allowed
+    with pytest.raises(ConfigError, match="sleep_tolerance"):
+        smoke_cfg.replace(sleep_tolerance=1.01 * limit)
+    for tol, frozen in ((limit, False), (2 * limit, True)):
+        m = synth.build_model(dataclasses.replace(smoke_cfg, sleep_tolerance=tol, air=False), 1.0, 100.0, 0.5)
+        d = mujoco.MjData(m)
+        d.qpos[:3], d.qvel[2] = (0.0, 0.0, 2.0), 1.0
+        for _ in range(int(0.25 / m.opt.timestep)):  # the apex is at 0.1 s; the ground is far below
+            mujoco.mj_step(m, d)
+        assert (d.ntree_awake == 0) == frozen, tol

@@ -92,6 +92,17 @@ def test_load_rejects_a_header_whose_config_does_not_match_its_key(tmp_path, smo
         synth.load(path)
 
 
+def test_a_file_from_before_sleeping_existed_loads_as_awake(tmp_path, smoke_dataset):
+    """Headers written before SynthConfig.sleep_tolerance lack the field: such a file still loads, as sleep 0."""
+    from study import cache
+
+    meta = dict(smoke_dataset.meta)
+    old = {k: v for k, v in meta["config"].items() if k != "sleep_tolerance"}
+    meta |= {"config": old, "key": cache.key({"config": old, "seed": meta["seed"], **meta["versions"]})}
+    path = data.save(dataclasses.replace(smoke_dataset, meta=meta), tmp_path / "old.npz")
+    assert synth.SynthConfig.from_dict(synth.load(path).meta["config"]).sleep_tolerance == 0.0
+
+
 @pytest.mark.parametrize(
     "change, field",
     [
@@ -103,6 +114,9 @@ def test_load_rejects_a_header_whose_config_does_not_match_its_key(tmp_path, smo
         (dict(n_train=0), "n_train"),
         (dict(timestep=1 / 1000), "timestep"),
         (dict(stiffness=1e6), "stiffness"),
+        (dict(sleep_tolerance=-1e-3), "sleep_tolerance"),
+        (dict(sleep_tolerance=0.1), "sleep_tolerance"),
+        (dict(sleep_tolerance=0.02), "sleep_tolerance"),  # sleeps at the apex of a throw at this timestep
         (dict(launch=synth.LaunchPrior(height=(0.05, 1.0))), "height"),
     ],
 )

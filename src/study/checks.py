@@ -1,18 +1,20 @@
 """Physics checks of the simulation settings, shared by the tests (which assert them) and the data
 chapter (which plots them): free flight against the analytic parabola, restitution from bounce
-heights against the value set, penetration against its bound, energy between flights, rest, and the
-timestep convergence of the measured restitution.
+heights against the value set, penetration against its bound, energy between flights, rest, the
+timestep convergence of the measured restitution, and what letting resting objects sleep changes.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
+from study import measure
 from study.contact import damping_for_restitution, drop_test
-from study.synth import GRAVITY, SynthConfig, build_model, staggered_qvel
+from study.synth import GRAVITY, SynthConfig, build_model, simulate, staggered_qvel
 
 
 def free_flight_error(cfg: SynthConfig, qpos0: np.ndarray, qvel0: np.ndarray, duration: float = 1.0) -> float:
@@ -111,3 +113,41 @@ def convergence(cfg: SynthConfig, restitutions: np.ndarray) -> dict[str, np.ndar
     b = damping_for_restitution(np.asarray(restitutions), cfg.shape, stiffness=cfg.stiffness, timestep=dt)
     at = lambda step: np.array([measured_restitution(cfg.shape, x, stiffness=cfg.stiffness, timestep=step) for x in b])  # noqa: E731
     return {"set": np.asarray(restitutions, float), "dt": at(dt), "dt/2": at(dt / 2)}
+
+
+def sleep_effect(
+    cfg: SynthConfig, params: dict[str, np.ndarray], idx, *, threads: int = 1, apart: float = 1e-4
+) -> dict[str, np.ndarray | float]:
+    """Trajectories ``idx`` of a split's ``params`` simulated with the config's sleeping and with none.
+
+    Returns per trajectory (each (n,)): ``max_diff``, the largest distance between the two centre
+    positions over the record, metres; ``first_apart``, the first frame time at which they are more
+    than ``apart`` metres apart, seconds (nan if never); ``first_diff``, the first frame time at which
+    they differ at all (nan if never); ``time_to_rest`` of the awake trajectory
+    (``study.measure.features``), seconds; ``last_speed_asleep``, ``last_speed_awake``, the largest
+    frame-to-frame speed in the last second of each record, m/s. And ``seconds_asleep``,
+    ``seconds_awake``: wall time of each simulation on ``threads`` threads.
+    """
+    sub = {k: v[np.asarray(idx)] for k, v in params.items()}
+    runs = {}
+    for name, c in (("asleep", cfg), ("awake", cfg.replace(sleep_tolerance=0.0))):
+        start = time.perf_counter()
+        runs[name] = simulate(c, sub, threads=threads, progress=False)
+        runs[f"seconds_{name}"] = time.perf_counter() - start
+    dist = np.linalg.norm(runs["asleep"] - runs["awake"], axis=-1)  # (n, T)
+    t = np.arange(cfg.n_frames) / cfg.fps
+    last_second = -int(round(cfg.fps))
+
+    def first(mask: np.ndarray) -> np.ndarray:
+        return np.where(mask.any(axis=1), t[np.argmax(mask, axis=1)], np.nan)
+
+    return {
+        "max_diff": dist.max(axis=1),
+        "first_apart": first(dist > apart),
+        "first_diff": first(dist > 0),
+        "time_to_rest": measure.features(runs["awake"], cfg.fps)["time_to_rest"],
+        "last_speed_asleep": measure.speeds(runs["asleep"], cfg.fps)[:, last_second:].max(axis=1),
+        "last_speed_awake": measure.speeds(runs["awake"], cfg.fps)[:, last_second:].max(axis=1),
+        "seconds_asleep": runs["seconds_asleep"],
+        "seconds_awake": runs["seconds_awake"],
+    }

@@ -35,6 +35,18 @@ from study.scene import Shape, compile_scene
 GRAVITY = 9.81
 """m/s^2, MuJoCo's default |gravity|."""
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+SLEEP_STEPS = mujoco.mjMINAWAKE
+"""Consecutive steps an object's speeds must stay under the sleep tolerance before MuJoCo puts it to sleep."""
+
+
+def max_sleep_tolerance(timestep: float) -> float:
+    """Largest sleep tolerance, m/s, that cannot put a thrown object to sleep in mid-air at this timestep (s).
+
+    MuJoCo puts a body to sleep when its speeds stay under the tolerance for :data:`SLEEP_STEPS`
+    steps, in the air as on the ground. At the apex of a throw without spin the vertical speed
+    crosses the band (-tol, tol) in 2 tol / (g dt) steps; we allow half of :data:`SLEEP_STEPS`.
+    """
+    return SLEEP_STEPS / 4 * GRAVITY * timestep
 
 
 @dataclass(frozen=True)
@@ -105,6 +117,8 @@ class SynthConfig:
     """Contact stiffness k of MuJoCo's direct solref, 1/s^2 (about 6 ms contacts; see the book)."""
     air: bool = True
     """Air drag and added mass through MuJoCo's ellipsoid fluid model (air at 20 C)."""
+    sleep_tolerance: float = 5e-3
+    """Speed below which MuJoCo puts a resting object to sleep (its position frozen), m/s; 0 keeps it awake."""
     shape: Shape = field(default_factory=Shape)
     """The object's shape, the same for every trajectory (a 20 cm cube by default)."""
     light: ClassPrior = LIGHT
@@ -147,6 +161,14 @@ class SynthConfig:
             return self.heavy
         raise ConfigError(f"unknown class {label!r}; allowed: 0/'light', 1/'heavy'")
 
+    @property
+    def max_sleep_tolerance(self) -> float:
+        """Largest sleep tolerance allowed at this timestep, m/s.
+
+        See :func:`max_sleep_tolerance`.
+        """
+        return max_sleep_tolerance(self.timestep)
+
     def max_impact_speed(self) -> float:
         """Bound on the normal speed of any point of the object at impact, m/s (drag ignored)."""
         vz = max(abs(self.launch.vertical_speed[0]), abs(self.launch.vertical_speed[1]))
@@ -163,6 +185,14 @@ class SynthConfig:
         check_range("SynthConfig.fps", self.fps, 1.0, 1000.0)
         check_range("SynthConfig.timestep", self.timestep, 1e-5, 0.01)
         check_range("SynthConfig.stiffness", self.stiffness, 1e3, 1e7)
+        check_range("SynthConfig.sleep_tolerance", self.sleep_tolerance, 0.0, 0.05)
+        if self.sleep_tolerance > self.max_sleep_tolerance:
+            raise ConfigError(
+                f"SynthConfig.sleep_tolerance = {self.sleep_tolerance!r} m/s: at the apex of a throw the vertical speed "
+                f"stays under it for {2 * self.sleep_tolerance / (GRAVITY * self.timestep):.1f} steps of "
+                f"{self.timestep:.3g} s, and MuJoCo puts a body to sleep, in mid-air too, after {SLEEP_STEPS}; allowed "
+                f"at this timestep: at most {self.max_sleep_tolerance:.4f} m/s, or 0 (never asleep)"
+            )
         ratio = 1.0 / (self.fps * self.timestep)
         if abs(ratio - round(ratio)) > 1e-6:
             raise ConfigError(
@@ -199,8 +229,13 @@ class SynthConfig:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> SynthConfig:
-        """Inverse of :meth:`to_dict`; raises :class:`ConfigError` on unknown or missing fields."""
+        """Inverse of :meth:`to_dict`; raises :class:`ConfigError` on unknown or missing fields.
+
+        A dict without ``sleep_tolerance`` is from a file written before sleeping existed, when every
+        object stayed awake: it reads as ``sleep_tolerance=0``.
+        """
         try:
+            d = {"sleep_tolerance": 0.0, **d}
             tup = lambda v: tuple(v) if isinstance(v, list) else v  # noqa: E731
             return cls(
                 **{k: v for k, v in d.items() if k not in ("shape", "light", "heavy", "launch")},
@@ -279,7 +314,7 @@ def build_model(cfg: SynthConfig, mass: float, damping: float, friction: float) 
     """The compiled scene for one object (SI units)."""
     return compile_scene(
         cfg.shape, mass=mass, damping=damping, stiffness=cfg.stiffness, friction=friction,
-        timestep=cfg.timestep, air=cfg.air,
+        timestep=cfg.timestep, air=cfg.air, sleep_tolerance=cfg.sleep_tolerance,
     )
 
 
@@ -424,7 +459,7 @@ def load(path: str | Path) -> data.Dataset:
     meta = ds.meta
     try:
         cfg = SynthConfig.from_dict(meta["config"])
-        key = cache.key({"config": cfg.to_dict(), "seed": meta["seed"], **meta["versions"]})
+        key = cache.key({"config": meta["config"], "seed": meta["seed"], **meta["versions"]})  # as written
     except (KeyError, ConfigError) as e:
         raise data.DataError(f"dataset {path}: the header lacks a valid config ({e}); regenerate it with `study synth`") from None
     if key != meta.get("key"):
