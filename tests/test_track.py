@@ -297,3 +297,16 @@ def test_render_is_deterministic(tmp_path):
     b = render.render(model, qpos, qvel, tmp_path / "b.mp4", cfg)
     assert a.truth.read_bytes() == b.truth.read_bytes()
     assert a.video.read_bytes() == b.video.read_bytes()
+
+
+def test_reusing_the_image_of_a_resting_object_leaves_the_video_unchanged(tmp_path):
+    """A heavy box that lands and falls asleep: its repeated poses reuse the last image, and the mp4
+    (noise and JPEG loss included) is byte for byte the one rendered image by image."""
+    model = render.class_model("heavy")
+    qpos, qvel = render.initial_state((0.0, 0.0, 0.4), (0.5, 0.0, 0.0), angvel=(1.0, 2.0, 0.0))
+    cfg = render.RenderConfig(width=96, height=72, duration=1.0, blur_subframes=2, noise_std=3.0, jpeg_quality=70, shadows=False)
+    fast = render.render(model, qpos, qvel, tmp_path / "fast.mp4", cfg)
+    slow = render.render(model, qpos, qvel, tmp_path / "slow.mp4", cfg, reuse=False)
+    assert fast.reused >= 8 and fast.drawn + fast.reused == slow.drawn == 2 * 30 and slow.reused == 0
+    assert fast.truth.read_bytes() == slow.truth.read_bytes()
+    assert fast.video.read_bytes() == slow.video.read_bytes()

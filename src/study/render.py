@@ -3,7 +3,8 @@
 :func:`simulate` steps a compiled scene (``study.scene.compile_scene``) from an initial state with
 ``mujoco.mj_step``; :func:`render` draws the stored states through the scene's fixed camera with
 MuJoCo's offscreen renderer, adds optional motion blur (the average of sub-frame renders over the
-shutter time), sensor noise and JPEG-like degradation, writes an mp4 (OpenCV, codec mp4v) and a CSV of
+shutter time), sensor noise and JPEG-like degradation (a resting, asleep object's pose repeats bit
+for bit, so its image is drawn once and reused), writes an mp4 (OpenCV, codec mp4v) and a CSV of
 the truth: time, world x, y, z of the object's centre (metres) and its projection u, v (pixels).
 
 Pixel coordinates: u to the right, v down, the centre of the top-left pixel at (0, 0), the same
@@ -28,6 +29,8 @@ from study.video import atomic_writer
 os.environ.setdefault("MUJOCO_GL", "egl")
 import mujoco  # noqa: E402  (MUJOCO_GL must be set before the first import)
 
+from study import synth  # noqa: E402
+
 CLASS_PARAMS: dict[str, dict[str, float]] = {
     "light": {"mass": 0.2, "damping": 100.0, "friction": 0.5},
     "heavy": {"mass": 5.0, "damping": 400.0, "friction": 0.5},
@@ -41,6 +44,8 @@ TIMESTEP = 1 / 1800
 """Simulation step, seconds; divides the frame period of 30 and 60 fps video."""
 OBJECT_RGBA = (0.9, 0.35, 0.05, 1.0)
 """The object's paint: a saturated orange the 'orange' tracker preset finds (hue about 10 of 180)."""
+SLEEP_TOLERANCE = synth.SynthConfig.sleep_tolerance
+"""m/s, synthesis's default: a resting object falls asleep, and its pose stays exactly the same."""
 
 
 @dataclass
@@ -101,15 +106,25 @@ class Rendered:
     """(n, 2) float64 pixels, the centre projected into the image (u right, v down)."""
     fps: float = 30.0
     """Frame rate, frames per second."""
+    drawn: int = 0
+    """Images MuJoCo rendered."""
+    reused: int = 0
+    """Sub-frame images not rendered again: the object's pose was bitwise that of the previous one."""
 
 
-def class_model(label: str, shape: Shape = Shape(), timestep: float = TIMESTEP, rgba=OBJECT_RGBA) -> mujoco.MjModel:
-    """The scene with one object of class ``label`` ('light' or 'heavy') using :data:`CLASS_PARAMS`."""
+def class_model(label: str, shape: Shape = Shape(), timestep: float = TIMESTEP, rgba=OBJECT_RGBA,
+                sleep_tolerance: float = SLEEP_TOLERANCE) -> mujoco.MjModel:
+    """The scene with one object of class ``label`` ('light' or 'heavy') using :data:`CLASS_PARAMS`.
+
+    ``sleep_tolerance``: m/s, as ``study.synth.SynthConfig.sleep_tolerance`` (0: never asleep).
+    """
     from study.scene import compile_scene
 
     if label not in CLASS_PARAMS:
         raise ConfigError(f"label = {label!r} is unknown; allowed: {', '.join(CLASS_PARAMS)}")
-    return compile_scene(shape, stiffness=STIFFNESS, timestep=timestep, rgba=rgba, **CLASS_PARAMS[label])
+    check_range("sleep_tolerance", sleep_tolerance, 0.0, synth.max_sleep_tolerance(timestep))
+    return compile_scene(shape, stiffness=STIFFNESS, timestep=timestep, rgba=rgba, sleep_tolerance=sleep_tolerance,
+                         **CLASS_PARAMS[label])
 
 
 def initial_state(
@@ -198,11 +213,14 @@ def render(
     qvel: np.ndarray,
     out: str | Path,
     cfg: RenderConfig | None = None,
+    reuse: bool = True,
 ) -> Rendered:
     """Simulate the throw from (qpos, qvel) and render it to ``out`` (mp4) plus ``out`` with suffix .csv (truth).
 
     Frame i shows the scene at time i / fps; with blur it averages ``blur_subframes`` renders spread
-    over the shutter time centred on it. Both files are written atomically.
+    over the shutter time centred on it. Both files are written atomically. ``reuse``: a sub-frame
+    whose object pose is bitwise that of the previous one (at rest, asleep) reuses its image instead
+    of rendering it again; the video is the same either way.
     """
     cfg = cfg or RenderConfig()
     cfg.validate()
@@ -221,11 +239,20 @@ def render(
     else:
         offsets = np.zeros(1, int)
 
+    last_pose, last_image, drawn, reused = b"", None, 0, 0
+
     def draw(step: int) -> np.ndarray:
+        nonlocal last_pose, last_image, drawn, reused
+        pose = states[step].tobytes()
+        if reuse and pose == last_pose:
+            reused += 1
+            return last_image
         data.qpos[:] = states[step]
         mujoco.mj_forward(model, data)
         renderer.update_scene(data, camera=cfg.camera)
-        return renderer.render()  # (H, W, 3) uint8 RGB, row 0 at the top
+        last_pose, last_image = pose, renderer.render()  # (H, W, 3) uint8 RGB, row 0 at the top
+        drawn += 1
+        return last_image
 
     t = np.arange(n_frames) / cfg.fps
     xyz = np.empty((n_frames, 3))
@@ -257,7 +284,7 @@ def render(
         f"{ti:.6f},{p[0]:.6f},{p[1]:.6f},{p[2]:.6f},{q[0]:.3f},{q[1]:.3f}" for ti, p, q in zip(t, xyz, uv)
     ]
     write_text_atomic(truth, "\n".join(rows) + "\n")
-    return Rendered(video=out, truth=truth, t=t, xyz=xyz, uv=uv, fps=cfg.fps)
+    return Rendered(video=out, truth=truth, t=t, xyz=xyz, uv=uv, fps=cfg.fps, drawn=drawn, reused=reused)
 
 
 def read_truth(path: str | Path) -> dict[str, np.ndarray]:
