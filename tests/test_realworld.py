@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -106,3 +108,18 @@ def test_rendered_motion_is_the_datasets_trajectory(smoke_cfg, smoke_dataset):
     np.testing.assert_allclose(states[:: cfg.steps_per_frame, :3][:30], split.x[0, :30], atol=1e-6)
     frames = render.filmstrip(cfg, split.params, 0, [0.0, 0.5], width=64, height=48)
     assert [f.shape for f in frames] == [(48, 64, 3)] * 2 and frames[0].dtype == np.uint8
+
+
+def test_renders_without_mujoco_gl_in_the_environment():
+    """A plain `python` with MUJOCO_GL unset renders too: importing study sets the headless default
+    before any module imports mujoco (mujoco reads it once, at its first import)."""
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    code = ("from study import synth, render\nimport mujoco\n"
+            "m = render.class_model('light'); d = mujoco.MjData(m); mujoco.mj_forward(m, d)\n"
+            "r = render._renderer(m, 24, 32); r.update_scene(d, camera='side'); print(r.render().shape)")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "(24, 32, 3)"

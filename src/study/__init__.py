@@ -8,6 +8,12 @@ A reproduction of Fathollahi & Kasturi, arXiv:1609.00361, as a package:
 Submodules are imported on demand (``from study import synth``) so that ``import study`` stays cheap.
 """
 
+import os
+
+# Headless rendering by default: MuJoCo reads MUJOCO_GL when it is first imported, which any submodule
+# may do (set MUJOCO_GL=osmesa, or glfw with a display, before importing study to choose otherwise).
+os.environ.setdefault("MUJOCO_GL", "egl")
+
 __version__ = "0.1.0"
 
 CLASSES: tuple[str, str] = ("light", "heavy")

@@ -18,18 +18,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
+import mujoco  # MUJOCO_GL's default (egl) is set in study/__init__.py, before any mujoco import
 import numpy as np
 from tqdm import tqdm
 
+from study import synth
 from study.cache import write_text_atomic
 from study.errors import ConfigError, RenderError, check_range
 from study.scene import Shape
 from study.video import atomic_writer
-
-os.environ.setdefault("MUJOCO_GL", "egl")
-import mujoco  # noqa: E402  (MUJOCO_GL must be set before the first import)
-
-from study import synth  # noqa: E402
 
 CLASS_PARAMS: dict[str, dict[str, float]] = {
     "light": {"mass": 0.2, "damping": 100.0, "friction": 0.5},
