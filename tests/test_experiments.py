@@ -37,7 +37,9 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
         ("z", 0.3, 9), ("z", 0.5, 15), ("xyz", 0.3, 9), ("xyz", 0.5, 15)]
     n_files = len(list((tmp_path / "runs").glob("*.json")))
     assert n_files == 2 + 4 + 2  # the length sweep's 0.5 s runs are the seed runs' (cache hits)
-    assert experiments.n_models(dataclasses.replace(TINY, cells=("peephole",))) == n_files
+    n_trained = len(list((tmp_path / "models").iterdir()))
+    assert n_trained == n_files - 1, "the Z seed run at the grid seed scores the grid winner's model"
+    assert experiments.n_models(dataclasses.replace(TINY, cells=("peephole",))) == n_trained
     control = experiments.full_bptt_control(ds, cfg, dataclasses.replace(TINY, control_lengths=(0.5,)), tmp_path,
                                             progress=False)
     assert [(r["dims"], r["length"], r["truncation"]) for r in control] == [("z", 0.5, 15), ("xyz", 0.5, 15)], \
@@ -50,6 +52,21 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
     assert experiments.seed_runs(ds, cfg, TINY, tmp_path, progress=False) == seeds
     assert experiments.grid(ds, TINY, tmp_path, progress=False) == grid
     assert not list((tmp_path / "runs").glob(".*tmp"))
+
+
+def test_test_run_scores_the_kept_model_of_the_same_run_without_test(tmp_path, ds, monkeypatch):
+    cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
+    trained = experiments.run(ds, cfg, tmp_path / "a", test=True)  # trained from scratch
+    experiments.run(ds, cfg, tmp_path / "b", test=False)
+
+    def no_training(*a, **k):
+        raise AssertionError("the kept model should have been scored, not retrained")
+
+    monkeypatch.setattr(train, "fit", no_training)
+    scored = experiments.run(ds, cfg, tmp_path / "b", test=True)
+    assert scored["test"] == trained["test"] and scored["val_accuracy"] == trained["val_accuracy"]
+    assert scored["key"] == trained["key"] and scored["history"] == trained["history"]
+    assert experiments.cached(ds, cfg, tmp_path / "b", test=True) == scored
 
 
 def test_run_record_and_key(tmp_path, ds):
