@@ -97,10 +97,11 @@ PRESETS: dict[str, Preset] = {
         control_lengths=(1.5,),
     ),
     # The real thing, at the minimum: a 2x2x2x2 grid on Z at 3 s (90 frames); 5 seeds for Z
-    # and XYZ; 8 lengths x 3 seeds x 2 dims; the ablation's 2 other cells x 5 seeds: 78 trained models
-    # (n_models). Measured on the 2-core machine (one thread per run, 1600 + 400 sequences of 90
-    # frames): 2-7 s per epoch; on the synthetic data Z converges in 15-25 epochs but X, Y, Z needs
-    # about 50 at the same settings, hence the 60-epoch cap (a 30-epoch cap left X, Y, Z at ~65 %).
+    # and XYZ; 8 lengths x 3 seeds x 2 dims; the ablation's 2 other cells x 5 seeds; 4 full-BPTT
+    # controls: 81 trained models (n_models). Measured on the 2-core machine (two runs at a time, one
+    # thread each, 1600 + 400 sequences of 90 frames): 1.0-1.9 s per epoch for the peephole LSTM with the
+    # compiled loop, 2.0 (GRU) and 2.4 (nn.LSTM); Z converges in 15-40 epochs, X, Y, Z needs up to
+    # 60 at the same settings, hence the 60-epoch cap (a 30-epoch cap left X, Y, Z at ~65 %).
     "paper": Preset(
         name="paper", length=3.0, lrs=(1e-3, 3e-3), truncations=(30, 90), dropouts=(0.2, 0.5),
         batch_sizes=(32, 128), seeds=(0, 1, 2, 3, 4), lengths=(0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0),
