@@ -16,7 +16,6 @@ Prints milliseconds per video frame for both, their ratio, and how many sub-fram
 from __future__ import annotations
 
 import argparse
-import math
 import tempfile
 import time
 from pathlib import Path
@@ -39,12 +38,9 @@ def main() -> None:
             c = cfg.replace(sleep_tolerance=way.get("sleep_tolerance", cfg.sleep_tolerance))
             t0, reused[name], drawn[name] = time.perf_counter(), 0, 0
             for i in range(len(params["label"])):
-                model, qpos, qvel = render.synth_model(c, params, i)
+                model, qpos, qvel = realworld.throw(c, params, i)  # as render_set films it
                 if "shadowsize" in way:
                     model.vis.quality.shadowsize = way["shadowsize"]
-                qvel = qvel.copy()
-                qvel[:2] *= min(1.0, 2.0 / max(math.hypot(*qvel[:2]), 1e-9))  # capped at 2 m/s, as render_set does
-                qpos, qvel = realworld.across_view(qpos, qvel)
                 r = render.render(model, qpos, qvel, Path(tmp) / f"{name}-{i}.mp4", rcfg, reuse=way["reuse"])
                 reused[name] += r.reused
                 drawn[name] += r.drawn

@@ -119,7 +119,7 @@ def test_a_sleeping_object_stays_exactly_where_it_lies(smoke_cfg):
 def test_the_sleep_tolerance_limit_keeps_thrown_objects_awake_at_their_apex(smoke_cfg):
     """MuJoCo sleeps a body in mid-air too: a spinless vertical toss freezes at its apex above the allowed
     tolerance (built unvalidated here), and not at the largest tolerance the config allows."""
-    limit = smoke_cfg.max_sleep_tolerance
+    limit = synth.max_sleep_tolerance(smoke_cfg.timestep)
     smoke_cfg.replace(sleep_tolerance=limit)  # allowed
     with pytest.raises(ConfigError, match="sleep_tolerance"):
         smoke_cfg.replace(sleep_tolerance=1.01 * limit)

@@ -116,14 +116,13 @@ def convergence(cfg: SynthConfig, restitutions: np.ndarray) -> dict[str, np.ndar
 
 
 def sleep_effect(
-    cfg: SynthConfig, params: dict[str, np.ndarray], idx, *, threads: int = 1, apart: float = 1e-4
+    cfg: SynthConfig, params: dict[str, np.ndarray], idx, *, threads: int = 1
 ) -> dict[str, np.ndarray | float]:
     """Trajectories ``idx`` of a split's ``params`` simulated with the config's sleeping and with none.
 
     Returns per trajectory (each (n,)): ``max_diff``, the largest distance between the two centre
-    positions over the record, metres; ``first_apart``, the first frame time at which they are more
-    than ``apart`` metres apart, seconds (nan if never); ``first_diff``, the first frame time at which
-    they differ at all (nan if never); ``time_to_rest`` of the awake trajectory
+    positions over the record, metres; ``first_diff``, the first frame time at which they differ at
+    all, seconds (nan if never); ``time_to_rest`` of the awake trajectory
     (``study.measure.features``), seconds; ``last_speed_asleep``, ``last_speed_awake``, the largest
     frame-to-frame speed in the last second of each record, m/s. And ``seconds_asleep``,
     ``seconds_awake``: wall time of each simulation on ``threads`` threads.
@@ -137,14 +136,10 @@ def sleep_effect(
     dist = np.linalg.norm(runs["asleep"] - runs["awake"], axis=-1)  # (n, T)
     t = np.arange(cfg.n_frames) / cfg.fps
     last_second = -int(round(cfg.fps))
-
-    def first(mask: np.ndarray) -> np.ndarray:
-        return np.where(mask.any(axis=1), t[np.argmax(mask, axis=1)], np.nan)
-
+    differs = dist > 0
     return {
         "max_diff": dist.max(axis=1),
-        "first_apart": first(dist > apart),
-        "first_diff": first(dist > 0),
+        "first_diff": np.where(differs.any(axis=1), t[np.argmax(differs, axis=1)], np.nan),
         "time_to_rest": measure.features(runs["awake"], cfg.fps)["time_to_rest"],
         "last_speed_asleep": measure.speeds(runs["asleep"], cfg.fps)[:, last_second:].max(axis=1),
         "last_speed_awake": measure.speeds(runs["awake"], cfg.fps)[:, last_second:].max(axis=1),

@@ -37,8 +37,8 @@ FLAGS = ["-O3", "-march=native", "-fno-math-errno", "-fno-trapping-math", "-ffp-
 class Native:
     """The loaded library: its four entry points and the BLAS routine pointers they call."""
 
-    def __init__(self, lib: ctypes.CDLL, sgemm: int, dgemm: int, path: Path) -> None:
-        self.lib, self.path = lib, path
+    def __init__(self, lib: ctypes.CDLL, sgemm: int, dgemm: int) -> None:
+        self.lib = lib  # held so the library stays loaded
         self.blas = {torch.float32: ctypes.c_void_p(sgemm), torch.float64: ctypes.c_void_p(dgemm)}
         self.forward = {torch.float32: lib.peephole_forward_f32, torch.float64: lib.peephole_forward_f64}
         self.backward = {torch.float32: lib.peephole_backward_f32, torch.float64: lib.peephole_backward_f64}
@@ -116,8 +116,7 @@ def load() -> Native | None:
         warnings.warn(f"peephole LSTM: using the slower PyTorch loop: {why}", RuntimeWarning, stacklevel=2)
         return None
     try:
-        path = _build(*compiler)
-        return Native(ctypes.CDLL(str(path)), *blas, path)
+        return Native(ctypes.CDLL(str(_build(*compiler))), *blas)
     except (OSError, subprocess.SubprocessError) as err:
         detail = getattr(err, "stderr", "") or str(err)
         warnings.warn(f"peephole LSTM: using the slower PyTorch loop: compiling {SOURCE.name} failed: {detail}",

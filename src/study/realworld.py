@@ -105,6 +105,18 @@ def across_view(qpos: np.ndarray, qvel: np.ndarray, start_x: float = 1.2) -> tup
     return qpos, qvel
 
 
+def throw(cfg, params: dict[str, np.ndarray], i: int, max_speed: float = 2.0):
+    """Throw ``i`` of a split's ``params`` as :func:`render_set` films it: its model (``render.synth_model``)
+    and its launch (qpos, qvel) turned across the camera's view, horizontal speed capped at ``max_speed`` m/s."""
+    model, qpos, qvel = render.synth_model(cfg, params, i)
+    qvel = qvel.copy()
+    h = math.hypot(qvel[0], qvel[1])
+    if h > max_speed:
+        qvel[:2] *= max_speed / h
+    qpos, qvel = across_view(qpos, qvel)
+    return model, qpos, qvel
+
+
 def render_set(
     cfg,
     n_per_class: int,
@@ -139,13 +151,7 @@ def render_set(
         videos.append(v)
         if v.path.is_file() and v.truth.is_file():
             continue
-        model, qpos, qvel = render.synth_model(cfg, params, i)
-        qvel = qvel.copy()
-        h = math.hypot(qvel[0], qvel[1])
-        if h > max_speed:
-            qvel[:2] *= max_speed / h
-        qpos, qvel = across_view(qpos, qvel)
-        render.render(model, qpos, qvel, v.path, rcfg)
+        render.render(*throw(cfg, params, i, max_speed), v.path, rcfg)
     (folder / "MANIFEST.csv").write_text("file,label\n" + "".join(f"{v.path.name},{v.label}\n" for v in videos))
     return videos
 

@@ -161,14 +161,6 @@ class SynthConfig:
             return self.heavy
         raise ConfigError(f"unknown class {label!r}; allowed: 0/'light', 1/'heavy'")
 
-    @property
-    def max_sleep_tolerance(self) -> float:
-        """Largest sleep tolerance allowed at this timestep, m/s.
-
-        See :func:`max_sleep_tolerance`.
-        """
-        return max_sleep_tolerance(self.timestep)
-
     def max_impact_speed(self) -> float:
         """Bound on the normal speed of any point of the object at impact, m/s (drag ignored)."""
         vz = max(abs(self.launch.vertical_speed[0]), abs(self.launch.vertical_speed[1]))
@@ -186,12 +178,13 @@ class SynthConfig:
         check_range("SynthConfig.timestep", self.timestep, 1e-5, 0.01)
         check_range("SynthConfig.stiffness", self.stiffness, 1e3, 1e7)
         check_range("SynthConfig.sleep_tolerance", self.sleep_tolerance, 0.0, 0.05)
-        if self.sleep_tolerance > self.max_sleep_tolerance:
+        limit = max_sleep_tolerance(self.timestep)
+        if self.sleep_tolerance > limit:
             raise ConfigError(
                 f"SynthConfig.sleep_tolerance = {self.sleep_tolerance!r} m/s: at the apex of a throw the vertical speed "
                 f"stays under it for {2 * self.sleep_tolerance / (GRAVITY * self.timestep):.1f} steps of "
                 f"{self.timestep:.3g} s, and MuJoCo puts a body to sleep, in mid-air too, after {SLEEP_STEPS}; allowed "
-                f"at this timestep: at most {self.max_sleep_tolerance:.4f} m/s, or 0 (never asleep)"
+                f"at this timestep: at most {limit:.4f} m/s, or 0 (never asleep)"
             )
         ratio = 1.0 / (self.fps * self.timestep)
         if abs(ratio - round(ratio)) > 1e-6:
