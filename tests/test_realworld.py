@@ -123,3 +123,12 @@ def test_renders_without_mujoco_gl_in_the_environment():
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip() == "(24, 32, 3)"
+
+
+def test_class_model_refuses_a_sleep_tolerance_that_would_freeze_a_throw_in_mid_air():
+    limit = synth.max_sleep_tolerance(render.TIMESTEP)
+    assert render.class_model("heavy", sleep_tolerance=limit).opt.sleep_tolerance == pytest.approx(limit)
+    with pytest.raises(ConfigError, match="sleep_tolerance"):
+        render.class_model("heavy", sleep_tolerance=2 * limit)
+    with pytest.raises(ConfigError, match="sleep_tolerance"):
+        render.class_model("heavy", sleep_tolerance=-1e-3)
