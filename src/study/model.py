@@ -157,6 +157,16 @@ def _backward_loop(
     return d_gates, dh, dc
 
 
+def _small_grads(d_gates: torch.Tensor, cs: torch.Tensor) -> tuple[torch.Tensor, ...]:
+    """Gradients of the peepholes w_ci, w_cf, w_co and of the bias, each summed over time and batch,
+    from dL/d(pre-activations) (T, B, 4H) and the cell states (T + 1, B, H)."""
+    T, B, H4 = d_gates.shape
+    dgi, dgf, _, dgo = d_gates.view(T, B, 4, H4 // 4).unbind(2)
+    c_old = cs[:-1]
+    return ((dgi * c_old).sum((0, 1)), (dgf * c_old).sum((0, 1)), (dgo * cs[1:]).sum((0, 1)),
+            d_gates.sum((0, 1)))
+
+
 def _native_for(xw: torch.Tensor) -> native.Native | None:
     """The compiled loop if it can run on ``xw`` (CPU, float32 or float64), else ``None``."""
     if xw.device.type != "cpu" or xw.dtype not in (torch.float32, torch.float64):
@@ -188,18 +198,21 @@ def _backward_native(
     lib: native.Native, d_out: torch.Tensor | None, d_h: torch.Tensor | None, d_c: torch.Tensor | None,
     gates: torch.Tensor, cs: torch.Tensor, tcs: torch.Tensor, weight_hh: torch.Tensor,
     w_ci: torch.Tensor, w_cf: torch.Tensor, w_co: torch.Tensor,
-) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """:func:`_backward_loop` in ``peephole.cpp`` (derivative factors computed inside the fused loop)."""
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, tuple[torch.Tensor, ...]]:
+    """:func:`_backward_loop` in ``peephole.cpp`` (derivative factors computed inside the fused loop); also
+    returns the peephole and bias gradients (w_ci, w_cf, w_co, bias), summed inside the loop."""
     T, B, H4 = gates.shape
     H = H4 // 4
     d_out = _time_major_grad(d_out, gates, T, B, H)
     dh = d_h.clone(memory_format=torch.contiguous_format) if d_h is not None else gates.new_zeros(B, H)
     dc = d_c.clone(memory_format=torch.contiguous_format) if d_c is not None else gates.new_zeros(B, H)
     d_gates = torch.empty_like(gates)
+    d_small = gates.new_empty(7 * H)
     w = [t.detach().contiguous() for t in (weight_hh, w_ci, w_cf, w_co)]
     lib.backward[gates.dtype](T, B, H, _ptr(gates), _ptr(cs), _ptr(tcs), *map(_ptr, w), _ptr(d_out), _ptr(dh),
-                              _ptr(dc), _ptr(d_gates), lib.blas[gates.dtype])
-    return d_gates, dh, dc
+                              _ptr(dc), _ptr(d_gates), _ptr(d_small), lib.blas[gates.dtype])
+    d_w_ci, d_w_cf, d_w_co, d_bias = d_small.split((H, H, H, 4 * H))
+    return d_gates, dh, dc, (d_w_ci, d_w_cf, d_w_co, d_bias)
 
 
 class PeepholeFunction(torch.autograd.Function):
@@ -231,26 +244,22 @@ class PeepholeFunction(torch.autograd.Function):
         T, B, H4 = gates.shape
         H = H4 // 4
         if ctx.native is not None:
-            d_gates, dh, dc = _backward_native(ctx.native, d_out, d_h, d_c, gates, cs, tcs, weight_hh, w_ci, w_cf, w_co)
+            d_gates, dh, dc, small = _backward_native(ctx.native, d_out, d_h, d_c, gates, cs, tcs, weight_hh,
+                                                      w_ci, w_cf, w_co)
         else:
             d_gates, dh, dc = _backward_loop(d_out, d_h, d_c, gates, cs, hs, tcs, weight_hh, w_ci, w_cf, w_co)
-        dg4 = d_gates.view(T, B, 4, H)
+            small = _small_grads(d_gates, cs)
+        d_w_ci, d_w_cf, d_w_co, d_bias = small
         flat = d_gates.reshape(T * B, H4)
         need = ctx.needs_input_grad
         dx = (d_gates @ weight_ih).transpose(0, 1) if need[0] else None  # (B, T, D)
         # Both weight gradients in one matrix product over all time steps: [x_t, h_{t-1}] (T B, D + H).
         xh = torch.cat((x.transpose(0, 1).reshape(T * B, -1), hs[:-1].reshape(T * B, H)), dim=1)
-        d_w = flat.t() @ xh  # (4H, D + H)
+        d_w = (xh.t() @ flat).t()  # (4H, D + H); this operand order is the faster one for BLAS here
         D = x.shape[2]
         d_w_ih = d_w[:, :D].contiguous() if need[3] else None
         d_w_hh = d_w[:, D:].contiguous() if need[4] else None
-        d_bias = flat.sum(0) if need[5] else None
-        dgi, dgf, _, dgo = dg4.unbind(2)
-        c_old = cs[:-1]
-        d_w_ci = (dgi * c_old).sum((0, 1))
-        d_w_cf = (dgf * c_old).sum((0, 1))
-        d_w_co = (dgo * cs[1:]).sum((0, 1))
-        return dx, dh, dc, d_w_ih, d_w_hh, d_bias, d_w_ci, d_w_cf, d_w_co
+        return dx, dh, dc, d_w_ih, d_w_hh, d_bias if need[5] else None, d_w_ci, d_w_cf, d_w_co
 
 
 def peephole_reference(
