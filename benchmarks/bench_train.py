@@ -47,7 +47,7 @@ def time_steps(cells: tuple[str, ...], B: int, T: int, steps: int, device: str) 
     nets = {}
     for cell in cells:
         torch.manual_seed(0)
-        net = Classifier(3, hidden=64, layers=2, dropout=0.2, cell=cell.split("-")[0]).to(device).train()
+        net = Classifier(3, hidden=64, layers=2, dropout=0.2, cell=cell.removesuffix("-pt")).to(device).train()
         nets[cell] = (net, torch.optim.Adam(net.parameters(), lr=1e-3))
     times: dict[str, list[float]] = {c: [] for c in cells}
     for i in range(steps + 1):

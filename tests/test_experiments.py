@@ -88,7 +88,7 @@ def test_run_record_and_key(tmp_path, ds):
 def test_ablation_and_baseline(tmp_path, ds):
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     rows = experiments.ablation(ds, cfg, dataclasses.replace(TINY, seeds=(0,)), tmp_path, progress=False)
-    assert [r["cell"] for r in rows] == ["peephole", "lstm", "gru"]
+    assert [r["cell"] for r in rows] == ["peephole", "no-peephole", "gru"]
     base = experiments.baseline_runs(ds, TINY)
     assert [r["dims"] for r in base] == ["z", "xyz"] and all(0 <= r["accuracy"] <= 1 for r in base)
 

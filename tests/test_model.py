@@ -123,6 +123,28 @@ def test_dropout_only_in_training_mode():
     assert torch.equal(net(x), net(x))
 
 
+def test_no_peephole_cell_keeps_its_peepholes_at_zero_and_equals_nn_lstm(backend):
+    torch.manual_seed(0)
+    net = Classifier(3, hidden=8, layers=2, cell="no-peephole").double()
+    names = {n for n, _ in net.named_parameters()}
+    assert not any(n.endswith(("w_ci", "w_cf", "w_co")) for n in names), "peepholes are not trained"
+    opt = torch.optim.Adam(net.parameters(), lr=0.1)
+    x = torch.randn(4, 6, 3, dtype=torch.float64)
+    torch.nn.functional.cross_entropy(net(x), torch.tensor([0, 1, 0, 1])).backward()
+    opt.step()
+    for layer in net.rnn.layers:
+        assert all(torch.equal(w, torch.zeros_like(w)) for w in (layer.w_ci, layer.w_cf, layer.w_co))
+    # Its function is nn.LSTM's: copy the weights (one bias = nn.LSTM's two summed) and compare.
+    ref = torch.nn.LSTM(3, 8, 2, batch_first=True).double()
+    with torch.no_grad():
+        for k, layer in enumerate(net.rnn.layers):
+            getattr(ref, f"weight_ih_l{k}").copy_(layer.weight_ih)
+            getattr(ref, f"weight_hh_l{k}").copy_(layer.weight_hh)
+            getattr(ref, f"bias_ih_l{k}").copy_(layer.bias)
+            getattr(ref, f"bias_hh_l{k}").zero_()
+        torch.testing.assert_close(net.rnn(x)[0], ref(x)[0], atol=1e-12, rtol=0)
+
+
 def test_unknown_cell():
     with pytest.raises(ConfigError, match="cell"):
         Classifier(3, cell="transformer")
@@ -154,7 +176,7 @@ def test_layer_without_grad_equals_layer_with_grad(backend):
     assert torch.equal(with_grad.detach(), without)
 
 
-@pytest.mark.parametrize("cell", ["peephole", "lstm"])
+@pytest.mark.parametrize("cell", ["peephole", "no-peephole", "lstm"])
 def test_numpy_streamer_equals_whole_sequence(cell):
     torch.manual_seed(0)
     net = Classifier(3, hidden=8, layers=2, cell=cell).double().eval()

@@ -131,8 +131,9 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--length", type=float, required=True, metavar="SECONDS",
                    help="input length: the first SECONDS of every trajectory (must not exceed the data)")
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the split, weights, batches, dropout (default: %(default)s)")
-    p.add_argument("--cell", choices=["peephole", "lstm", "gru"], default=d.cell,
-                   help="recurrent cell: the paper's peephole LSTM, nn.LSTM or nn.GRU (default: %(default)s)")
+    p.add_argument("--cell", choices=["peephole", "no-peephole", "lstm", "gru"], default=d.cell,
+                   help="recurrent cell: the paper's peephole LSTM, the same layer without peepholes, nn.LSTM or "
+                        "nn.GRU (default: %(default)s)")
     p.add_argument("--epochs", type=int, default=d.max_epochs, help="most epochs; early stopping may end sooner (default: %(default)s)")
     p.add_argument("--lr", type=float, default=d.lr, help="Adam learning rate (default: %(default)s)")
     p.add_argument("--batch-size", type=int, default=d.batch_size, help="trajectories per step (default: %(default)s)")

@@ -12,7 +12,8 @@ The chapters call, in order:
    is not looked at); :func:`best_config` picks the highest validation accuracy.
 2. :func:`seed_runs` -- the chosen config for Z and XYZ with several seeds, scored on the test split.
 3. :func:`length_sweep` -- accuracy against input length for Z and XYZ (the paper's Figure 4).
-4. :func:`ablation` -- peephole LSTM vs ``nn.LSTM`` vs GRU at the chosen config, same seeds.
+4. :func:`ablation` -- peephole LSTM vs the same layer without peepholes vs GRU at the chosen config,
+   same seeds.
 5. :func:`baseline_runs` -- the physics baseline of :mod:`study.baseline`, same split.
 
 Every function returns a tidy list of dicts (one row per run), ready for ``pandas.DataFrame``.
@@ -70,8 +71,8 @@ class Preset:
     """Early-stopping patience of every run, epochs."""
     grid_seed: int = 0
     """The seed of every grid run."""
-    cells: tuple[str, ...] = ("peephole", "lstm", "gru")
-    """Cells compared in the ablation."""
+    cells: tuple[str, ...] = ("peephole", "no-peephole", "gru")
+    """Cells compared in the ablation (``study.model.CELLS``)."""
     ablation_dims: str = "z"
     """Input dims of the ablation (the grid's, as in the paper's search)."""
     control_lengths: tuple[float, ...] = ()
@@ -291,7 +292,8 @@ def full_bptt_control(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: s
 
 def ablation(dataset: Dataset, cfg: TrainConfig, p: Preset, data_dir: str | Path = "data", progress: bool = True,
              workers: int = 1) -> list[dict]:
-    """Peephole LSTM vs nn.LSTM vs GRU at the chosen config on ``p.ablation_dims``, same seeds."""
+    """The cells ``p.cells`` (peephole LSTM, the same without peepholes, GRU) at the chosen config on
+    ``p.ablation_dims``, same seeds."""
     cfgs = [dataclasses.replace(cfg, dims=p.ablation_dims, cell=c, seed=s) for c in p.cells for s in p.seeds]
     return [_row(r, "cell", "dims", "seed") for r in _runs(dataset, cfgs, data_dir, True, "ablation", progress, workers)]
 

@@ -32,8 +32,10 @@ import torch.nn.functional as F
 from study import native
 from study.errors import ConfigError
 
-CELLS = ("peephole", "lstm", "gru")
-"""Recurrent cells the classifier offers: the paper's peephole LSTM, ``nn.LSTM``, ``nn.GRU``."""
+CELLS = ("peephole", "no-peephole", "lstm", "gru")
+"""Recurrent cells the classifier offers: the paper's peephole LSTM; the same layer with its peepholes fixed
+at zero (an LSTM without peepholes on the same compiled loop: the ablation's control); ``nn.LSTM``;
+``nn.GRU``."""
 
 # A layer's state is (h, c) for the LSTMs, h alone for the GRU; the classifier's state is whatever its
 # recurrent core takes: a list of per-layer (h, c) for the peephole stack, nn.LSTM's or nn.GRU's own.
@@ -41,18 +43,24 @@ State = object
 
 
 class PeepholeLSTM(nn.Module):
-    """One peephole LSTM layer over a batch-first sequence (see the module docstring for the gates)."""
+    """One peephole LSTM layer over a batch-first sequence (see the module docstring for the gates).
 
-    def __init__(self, input_size: int, hidden_size: int) -> None:
+    With ``peepholes=False`` the peephole weights are zero buffers, not parameters: the layer is then a
+    plain LSTM (the function of ``nn.LSTM``) that runs on the same loop.
+    """
+
+    def __init__(self, input_size: int, hidden_size: int, peepholes: bool = True) -> None:
         super().__init__()
         H = hidden_size
         self.input_size, self.hidden_size = input_size, hidden_size
         self.weight_ih = nn.Parameter(torch.empty(4 * H, input_size))  # rows: i, f, g, o
         self.weight_hh = nn.Parameter(torch.empty(4 * H, H))
         self.bias = nn.Parameter(torch.empty(4 * H))
-        self.w_ci = nn.Parameter(torch.empty(H))  # peepholes: diagonal, one weight per unit
-        self.w_cf = nn.Parameter(torch.empty(H))
-        self.w_co = nn.Parameter(torch.empty(H))
+        for name in ("w_ci", "w_cf", "w_co"):  # peepholes: diagonal, one weight per unit
+            if peepholes:
+                setattr(self, name, nn.Parameter(torch.empty(H)))
+            else:
+                self.register_buffer(name, torch.zeros(H))
         self.reset_parameters()
 
     def reset_parameters(self) -> None:
@@ -296,10 +304,10 @@ def peephole_reference(
 class PeepholeStack(nn.Module):
     """``layers`` peephole LSTM layers, each feeding the next; state is a list of per-layer (h, c)."""
 
-    def __init__(self, input_size: int, hidden_size: int, layers: int) -> None:
+    def __init__(self, input_size: int, hidden_size: int, layers: int, peepholes: bool = True) -> None:
         super().__init__()
         sizes = [input_size] + [hidden_size] * (layers - 1)
-        self.layers = nn.ModuleList(PeepholeLSTM(d, hidden_size) for d in sizes)
+        self.layers = nn.ModuleList(PeepholeLSTM(d, hidden_size, peepholes) for d in sizes)
 
     def forward(self, x: torch.Tensor, state: list | None = None) -> tuple[torch.Tensor, list]:
         """``x`` (B, T, D) -> last layer's hidden states (B, T, H) and the new per-layer states."""
@@ -326,8 +334,8 @@ class Classifier(nn.Module):
             raise ConfigError(f"cell = {cell!r} is not a known cell; use one of {CELLS}")
         self.cell_type = cell
         self.register_buffer("scale", torch.ones(n_inputs))  # (D,) train-set std of each input dim
-        if cell == "peephole":
-            self.rnn = PeepholeStack(n_inputs, hidden, layers)
+        if cell in ("peephole", "no-peephole"):
+            self.rnn = PeepholeStack(n_inputs, hidden, layers, peepholes=cell == "peephole")
         elif cell == "lstm":
             self.rnn = nn.LSTM(n_inputs, hidden, layers, batch_first=True)
         else:
@@ -355,7 +363,7 @@ class Classifier(nn.Module):
     def init_state(self, batch: int) -> State:
         """The zero state for streaming ``batch`` trajectories with :meth:`step`."""
         w = self.head.weight
-        if self.cell_type == "peephole":
+        if isinstance(self.rnn, PeepholeStack):
             return [layer.init_state(batch, w) for layer in self.rnn.layers]
         h = w.new_zeros(self.rnn.num_layers, batch, self.rnn.hidden_size)
         return (h, h.clone()) if self.cell_type == "lstm" else h

@@ -89,7 +89,7 @@ class Streamer:
         self.n_inputs = int(net.scale.numel())
         self.layers: list[_Layer] = []
         get = lambda t: t.detach().double().cpu().numpy()  # noqa: E731
-        if net.cell_type == "peephole":
+        if net.cell_type in ("peephole", "no-peephole"):  # the latter's peepholes are zero buffers
             for layer in net.rnn.layers:
                 self.layers.append(_Layer(get(layer.weight_ih), get(layer.weight_hh), get(layer.bias),
                                           get(layer.w_ci), get(layer.w_cf), get(layer.w_co), dtype))
@@ -102,7 +102,7 @@ class Streamer:
         else:
             raise ConfigError(
                 f"Streamer: cell {net.cell_type!r} is not supported; use Classifier.step for it, or a "
-                "'peephole' or 'lstm' model"
+                "'peephole', 'no-peephole' or 'lstm' model"
             )
         self.inv_scale = (1.0 / get(net.scale)).astype(dtype)
         self.w_out = np.ascontiguousarray(get(net.head.weight).T, dtype=dtype)  # (H, 2)

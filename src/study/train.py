@@ -81,7 +81,8 @@ class TrainConfig:
     seed: int = 0
     """Seeds the validation split, the initial weights, the batch order and the dropout masks."""
     cell: str = "peephole"
-    """Recurrent cell: 'peephole' (the paper's), 'lstm' (nn.LSTM) or 'gru' (nn.GRU)."""
+    """Recurrent cell: 'peephole' (the paper's), 'no-peephole' (the same layer, peepholes fixed at 0), 'lstm'
+    (nn.LSTM) or 'gru' (nn.GRU)."""
 
     def check(self) -> None:
         """Raise :class:`ConfigError` naming the first field that is out of range."""
