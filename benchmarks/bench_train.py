@@ -6,7 +6,8 @@ for T = 90 and 300 frames: ms per step, sequences per second, the time of one ep
 training set (1600 sequences), and the peephole/nn.LSTM throughput ratio (1.0 = as fast as the
 vendor kernel; issue 5's target is >= 0.7 on CPU, >= 0.5 on GPU). On CPU a third row, ``peephole-pt``,
 times the same layer with its time loop as PyTorch operations instead of the compiled loop of
-``study.native`` (the plain baseline of that kernel). Also the streaming cost: one
+``study.native`` (the plain baseline of that kernel), and two more the GRU of the ablation: ``gru`` on
+its compiled loop (:mod:`study.gru`), ``gru-pt`` as plain ``nn.GRU``. Also the streaming cost: one
 frame's update of a single trajectory's state. Batch 32 as well on CPU (the training default). On
 CUDA too when a GPU is present (batch 128 and 1024).
 
@@ -118,12 +119,15 @@ def main() -> None:
         if device == "cuda":
             shapes += [(1024, 90), (1024, 300)]
         for B, T in shapes:
-            cells = ("lstm", "peephole", "peephole-pt") if device == "cpu" and native.active() else ("lstm", "peephole")
+            compiled = device == "cpu" and native.active() is not None
+            cells = ("lstm", "peephole", "peephole-pt", "gru", "gru-pt") if compiled else ("lstm", "peephole")
             res = time_steps(cells, B, T, steps if device == "cpu" else 10, device)
             for cell, s in res.items():
                 ratio = res["lstm"] / s
                 print(f"{device:6} {B:5d} {T:4d} {cell:11} {s * 1e3:9.1f} {B / s:9.0f} "
                       f"{EPOCH_SEQUENCES / B * s:8.2f} {ratio:6.2f}")
+            if compiled:
+                print(f"{'':17} compiled GRU vs nn.GRU: {res['gru-pt'] / res['gru']:.2f}x")
     frames = 300 if a.quick else 2000
     stream = {c: time_stream(c, frames) for c in ("lstm", "peephole")}
     fast = time_streamer(frames)

@@ -46,12 +46,12 @@ def key(obj: Any, length: int = 16) -> str:
 
 def source_hash(*module_names: str) -> str:
     """Hash of the source files of the named ``study`` modules (``"synth"``, or a file such as
-    ``"peephole.cpp"``), or of all of them (every ``.py`` and ``.cpp`` file of the package).
+    ``"peephole.cpp"``), or of all of them (every ``.py``, ``.cpp`` and ``.h`` file of the package).
 
     Part of every cache key, so a change to the code that made a file makes a new file.
     """
     names = module_names or tuple(sorted(p.stem if p.suffix == ".py" else p.name for p in PACKAGE_DIR.iterdir()
-                                         if p.suffix in (".py", ".cpp")))
+                                         if p.suffix in (".py", ".cpp", ".h")))
     h = hashlib.sha256()
     for name in names:
         h.update(name.encode())

@@ -30,12 +30,13 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from study import native
+from study.gru import GRU
 from study.errors import ConfigError
 
 CELLS = ("peephole", "no-peephole", "lstm", "gru")
 """Recurrent cells the classifier offers: the paper's peephole LSTM; the same layer with its peepholes fixed
 at zero (an LSTM without peepholes on the same compiled loop: the ablation's control); ``nn.LSTM``;
-``nn.GRU``."""
+``nn.GRU`` (as :class:`study.gru.GRU`, on a compiled loop too)."""
 
 # A layer's state is (h, c) for the LSTMs, h alone for the GRU; the classifier's state is whatever its
 # recurrent core takes: a list of per-layer (h, c) for the peephole stack, nn.LSTM's or nn.GRU's own.
@@ -339,7 +340,7 @@ class Classifier(nn.Module):
         elif cell == "lstm":
             self.rnn = nn.LSTM(n_inputs, hidden, layers, batch_first=True)
         else:
-            self.rnn = nn.GRU(n_inputs, hidden, layers, batch_first=True)
+            self.rnn = GRU(n_inputs, hidden, layers)  # nn.GRU, on the compiled loop where it can
         self.drop = nn.Dropout(dropout)
         self.head = nn.Linear(hidden, 2)
 

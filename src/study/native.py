@@ -1,4 +1,5 @@
-"""The compiled time loop of the peephole LSTM (``peephole.cpp``): built on first use, loaded with ctypes.
+"""The compiled time loops of the recurrent layers (``peephole.cpp``, ``gru.cpp``): built on first use,
+loaded with ctypes.
 
 Why: one time step of the layer is one small matrix product and a dozen elementwise operations; as
 PyTorch kernels each costs a few microseconds of dispatch, which at batch 32 is most of the training
@@ -29,7 +30,10 @@ from pathlib import Path
 
 import torch
 
-SOURCE = Path(__file__).resolve().parent / "peephole.cpp"
+_HERE = Path(__file__).resolve().parent
+SOURCES = (_HERE / "peephole.cpp", _HERE / "gru.cpp")
+"""Compiled together into one library; both include ``rnn_math.h``."""
+HEADER = _HERE / "rnn_math.h"
 FLAGS = ["-O3", "-march=native", "-fno-math-errno", "-fno-trapping-math", "-ffp-contract=fast",
          "-funsafe-math-optimizations", "-ffinite-math-only", "-fschedule-insns", "-fsched-pressure",
          "-fPIC", "-shared", "-std=c++17"]
@@ -42,14 +46,17 @@ pair interleaves independent units' instructions. Outputs stay within the tests'
 
 
 class Native:
-    """The loaded library: its four entry points and the BLAS routine pointers they call."""
+    """The loaded library: its entry points (per dtype) and the BLAS routine pointers they call."""
 
     def __init__(self, lib: ctypes.CDLL, sgemm: int, dgemm: int) -> None:
         self.lib = lib  # held so the library stays loaded
         self.blas = {torch.float32: ctypes.c_void_p(sgemm), torch.float64: ctypes.c_void_p(dgemm)}
         self.forward = {torch.float32: lib.peephole_forward_f32, torch.float64: lib.peephole_forward_f64}
         self.backward = {torch.float32: lib.peephole_backward_f32, torch.float64: lib.peephole_backward_f64}
-        for fn in (*self.forward.values(), *self.backward.values()):
+        self.gru_forward = {torch.float32: lib.gru_forward_f32, torch.float64: lib.gru_forward_f64}
+        self.gru_backward = {torch.float32: lib.gru_backward_f32, torch.float64: lib.gru_backward_f64}
+        for fn in (*self.forward.values(), *self.backward.values(), *self.gru_forward.values(),
+                   *self.gru_backward.values()):
             fn.restype = None
 
 
@@ -93,17 +100,17 @@ def _blas() -> tuple[int, int] | None:
 
 
 def _build(cxx: str, version: str) -> Path:
-    source = SOURCE.read_bytes()
+    source = b"\0".join(f.read_bytes() for f in (*SOURCES, HEADER))
     key = hashlib.sha256(b"\0".join([source, version.encode(), " ".join(FLAGS).encode(), _cpu().encode(),
                                      platform.machine().encode()])).hexdigest()[:16]
-    target = cache_dir() / f"peephole-{key}.so"
+    target = cache_dir() / f"rnn-{key}.so"
     if target.is_file():
         return target
     target.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(suffix=".so", dir=target.parent)
     os.close(fd)
     try:
-        subprocess.run([cxx, *FLAGS, str(SOURCE), "-o", tmp], check=True, capture_output=True, text=True, timeout=300)
+        subprocess.run([cxx, *FLAGS, *map(str, SOURCES), "-o", tmp], check=True, capture_output=True, text=True, timeout=300)
         os.replace(tmp, target)
     finally:
         if os.path.exists(tmp):
@@ -120,13 +127,14 @@ def load() -> Native | None:
     compiler = _compiler()
     if blas is None or compiler is None:
         why = "PyTorch's BLAS routines are not exported" if blas is None else "no C++ compiler (set CXX or install g++)"
-        warnings.warn(f"peephole LSTM: using the slower PyTorch loop: {why}", RuntimeWarning, stacklevel=2)
+        warnings.warn(f"recurrent layers: using the slower PyTorch loops: {why}", RuntimeWarning, stacklevel=2)
         return None
     try:
         return Native(ctypes.CDLL(str(_build(*compiler))), *blas)
     except (OSError, subprocess.SubprocessError) as err:
         detail = getattr(err, "stderr", "") or str(err)
-        warnings.warn(f"peephole LSTM: using the slower PyTorch loop: compiling {SOURCE.name} failed: {detail}",
+        names = ", ".join(f.name for f in SOURCES)
+        warnings.warn(f"recurrent layers: using the slower PyTorch loops: compiling {names} failed: {detail}",
                       RuntimeWarning, stacklevel=2)
         return None
 

@@ -1,0 +1,93 @@
+"""``nn.GRU`` with the compiled time loop of ``gru.cpp`` on CPU: the ablation's GRU at the peephole LSTM's speed.
+
+:class:`GRU` *is* an ``nn.GRU`` (same parameters, initialisation, state dict and state shape), so a
+model saved with one loads into the other. Its forward runs each layer through :class:`GRUFunction`:
+one BLAS call and one fused elementwise pass per time step in ``gru.cpp`` (:mod:`study.native`), a
+hand-written backward, and the weight gradients as single matrix products over all steps. Where the
+compiled loop cannot run (CUDA, other dtypes, ``study.native`` disabled or unavailable, inter-layer
+dropout, unbatched input) it is plain ``nn.GRU``.
+
+Shapes: B batch, T frames, D input dims, H hidden units, L layers; batch-first like the classifier.
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+from study import native
+
+
+def _ptr(t: torch.Tensor) -> ctypes.c_void_p:
+    return ctypes.c_void_p(t.data_ptr())
+
+
+class GRUFunction(torch.autograd.Function):
+    """One GRU layer over a batch-first sequence: ``x`` (B, T, D), ``h0`` (B, H) -> all hidden states
+    (B, T, H) and the last (B, H); parameters as ``nn.GRU``'s layer (gate rows r, z, n)."""
+
+    @staticmethod
+    def forward(ctx, x, h0, weight_ih, weight_hh, bias_ih, bias_hh):  # type: ignore[override]
+        lib = native.active()
+        T, B, H = x.shape[1], x.shape[0], weight_hh.shape[1]
+        # b_hr and b_hz add to the pre-activations like b_ir, b_iz; b_hn sits inside r (W_hn h + b_hn).
+        bias = torch.cat((bias_ih[: 2 * H] + bias_hh[: 2 * H], bias_ih[2 * H:]))
+        gates = F.linear(x.transpose(0, 1), weight_ih, bias).contiguous()  # (T, B, 3H)
+        hs = gates.new_empty(T + 1, B, H)
+        hs[0] = h0
+        hn = gates.new_empty(T, B, H)
+        scratch = gates.new_empty(B, 3 * H)
+        w = [t.detach().contiguous() for t in (weight_hh.t(), bias_hh[2 * H:])]
+        lib.gru_forward[gates.dtype](T, B, H, _ptr(gates), *map(_ptr, w), _ptr(hs), _ptr(hn), _ptr(scratch),
+                                     lib.blas[gates.dtype])
+        ctx.lib = lib
+        ctx.save_for_backward(x, weight_ih, weight_hh, gates, hs, hn)
+        return hs[1:].transpose(0, 1), hs[-1].clone()
+
+    @staticmethod
+    def backward(ctx, d_out, d_h):  # type: ignore[override]
+        x, weight_ih, weight_hh, gates, hs, hn = ctx.saved_tensors
+        lib = ctx.lib
+        T, B, H3 = gates.shape
+        H = H3 // 3
+        d_out = (gates.new_zeros(T, B, H) if d_out is None
+                 else d_out.transpose(0, 1).clone(memory_format=torch.contiguous_format))  # time-major, ours
+        dh = d_h.clone(memory_format=torch.contiguous_format) if d_h is not None else gates.new_zeros(B, H)
+        d_x, d_s = torch.empty_like(gates), torch.empty_like(gates)  # (T, B, 3H) each
+        lib.gru_backward[gates.dtype](T, B, H, _ptr(gates), _ptr(hs), _ptr(hn), _ptr(weight_hh.detach().contiguous()),
+                                      _ptr(d_out), _ptr(dh), _ptr(d_x), _ptr(d_s), lib.blas[gates.dtype])
+        need = ctx.needs_input_grad
+        dx = (d_x @ weight_ih).transpose(0, 1) if need[0] else None  # (B, T, D)
+        flat_x, flat_s = d_x.reshape(T * B, H3), d_s.reshape(T * B, H3)
+        d_w_ih = (x.transpose(0, 1).reshape(T * B, -1).t() @ flat_x).t() if need[2] else None  # (3H, D)
+        d_w_hh = (hs[:-1].reshape(T * B, H).t() @ flat_s).t() if need[3] else None  # (3H, H)
+        d_b_ih = flat_x.sum(0) if need[4] else None
+        d_b_hh = flat_s.sum(0) if need[5] else None
+        return dx, dh, d_w_ih, d_w_hh, d_b_ih, d_b_hh
+
+
+class GRU(nn.GRU):
+    """``nn.GRU`` (batch-first) whose forward uses the compiled loop where it can (see the module docstring)."""
+
+    def __init__(self, input_size: int, hidden_size: int, num_layers: int = 1) -> None:
+        super().__init__(input_size, hidden_size, num_layers, batch_first=True)
+
+    def _compiled(self, x: torch.Tensor) -> bool:
+        return (x.dim() == 3 and x.device.type == "cpu" and x.dtype in (torch.float32, torch.float64)
+                and self.dropout == 0 and not self.bidirectional and self.proj_size == 0
+                and native.active() is not None)
+
+    def forward(self, x: torch.Tensor, hx: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:  # type: ignore[override]
+        """``x`` (B, T, D), ``hx`` (L, B, H) or None -> outputs (B, T, H) and the final states (L, B, H)."""
+        if not self._compiled(x):
+            return super().forward(x, hx)
+        h0 = x.new_zeros(self.num_layers, x.shape[0], self.hidden_size) if hx is None else hx
+        finals = []
+        for k in range(self.num_layers):
+            x, h = GRUFunction.apply(x, h0[k], *(getattr(self, f"{n}_l{k}") for n in
+                                                  ("weight_ih", "weight_hh", "bias_ih", "bias_hh")))
+            finals.append(h)
+        return x, torch.stack(finals)
