@@ -100,8 +100,9 @@ PRESETS: dict[str, Preset] = {
     # The real thing, at the minimum: a 2x2x2x2 grid on Z at 3 s (90 frames); 5 seeds for Z
     # and XYZ; 8 lengths x 3 seeds x 2 dims; the ablation's 2 other cells x 5 seeds; 4 full-BPTT
     # controls: 81 trained models (n_models). Measured on the 2-core machine (two runs at a time, one
-    # thread each, 1600 + 400 sequences of 90 frames): 1.0-1.9 s per epoch for the peephole LSTM with the
-    # compiled loop, 2.0 (GRU) and 2.4 (nn.LSTM); Z converges in 15-40 epochs, X, Y, Z needs up to
+    # thread each, 1600 + 400 sequences of 90 frames), all on the compiled loops: 1.0-1.6 s per epoch
+    # for the peephole LSTM (and without peepholes), 1.15 for the GRU (nn.GRU itself: 3.4 at batch 32);
+    # Z converges in 15-40 epochs, X, Y, Z needs up to
     # 60 at the same settings, hence the 60-epoch cap (a 30-epoch cap left X, Y, Z at ~65 %).
     "paper": Preset(
         name="paper", length=3.0, lrs=(1e-3, 3e-3), truncations=(30, 90), dropouts=(0.2, 0.5),
