@@ -70,18 +70,15 @@ def test_same_initialisation_and_state_dict_as_nn_gru():
     assert all(torch.equal(a, b) for a, b in zip(ours.state_dict().values(), theirs.state_dict().values()))
 
 
-def test_gru_classifier_trains_on_the_compiled_loop_and_falls_back_elsewhere():
+def test_gru_classifier_trains_on_the_compiled_loop_and_falls_back_elsewhere(monkeypatch):
     torch.manual_seed(0)
     net = Classifier(3, hidden=8, cell="gru")
     x = torch.randn(4, 6, 3)
     calls = []
     orig = GRUFunction.apply
-    try:
-        GRUFunction.apply = lambda *a: calls.append(1) or orig(*a)  # type: ignore[method-assign]
-        net(x).sum().backward()
-        assert len(calls) == 2, "both layers ran the compiled loop"
-        with native.disabled():
-            net(x)
-        assert len(calls) == 2, "with study.native disabled the layer is plain nn.GRU"
-    finally:
-        GRUFunction.apply = orig  # type: ignore[method-assign]
+    monkeypatch.setattr(GRUFunction, "apply", lambda *a: calls.append(1) or orig(*a))
+    net(x).sum().backward()
+    assert len(calls) == 2, "both layers ran the compiled loop"
+    with native.disabled():
+        net(x)
+    assert len(calls) == 2, "with study.native disabled the layer is plain nn.GRU"

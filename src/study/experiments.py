@@ -125,7 +125,8 @@ def run_key(dataset: Dataset, cfg: TrainConfig, test: bool) -> str:
     """The cache key of one trained run."""
     return cache.key({
         "format": RUN_FORMAT, "data": dataset.key, "config": dataclasses.asdict(cfg), "test": test,
-        "code": cache.source_hash("model", "gru", "train", "native", "peephole.cpp", "gru.cpp", "rnn_math.h"), "torch": torch.__version__,
+        "code": cache.source_hash("model", "gru", "train", "native", *(f.name for f in native.FILES)),
+        "torch": torch.__version__,
         "backend": native.backend(),  # the compiled and the PyTorch time loop round differently
     })
 

@@ -12,17 +12,11 @@ Shapes: B batch, T frames, D input dims, H hidden units, L layers; batch-first l
 
 from __future__ import annotations
 
-import ctypes
-
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
 from study import native
-
-
-def _ptr(t: torch.Tensor) -> ctypes.c_void_p:
-    return ctypes.c_void_p(t.data_ptr())
 
 
 class GRUFunction(torch.autograd.Function):
@@ -41,7 +35,7 @@ class GRUFunction(torch.autograd.Function):
         hn = gates.new_empty(T, B, H)
         scratch = gates.new_empty(B, 3 * H)
         w = [t.detach().contiguous() for t in (weight_hh.t(), bias_hh[2 * H:])]
-        lib.gru_forward[gates.dtype](T, B, H, _ptr(gates), *map(_ptr, w), _ptr(hs), _ptr(hn), _ptr(scratch),
+        lib.gru_forward[gates.dtype](T, B, H, native.ptr(gates), *map(native.ptr, w), native.ptr(hs), native.ptr(hn), native.ptr(scratch),
                                      lib.blas[gates.dtype])
         ctx.lib = lib
         ctx.save_for_backward(x, weight_ih, weight_hh, gates, hs, hn)
@@ -53,12 +47,11 @@ class GRUFunction(torch.autograd.Function):
         lib = ctx.lib
         T, B, H3 = gates.shape
         H = H3 // 3
-        d_out = (gates.new_zeros(T, B, H) if d_out is None
-                 else d_out.transpose(0, 1).clone(memory_format=torch.contiguous_format))  # time-major, ours
-        dh = d_h.clone(memory_format=torch.contiguous_format) if d_h is not None else gates.new_zeros(B, H)
+        d_out = native.own(None if d_out is None else d_out.transpose(0, 1), gates, (T, B, H))  # time-major
+        dh = native.own(d_h, gates, (B, H))
         d_x, d_s = torch.empty_like(gates), torch.empty_like(gates)  # (T, B, 3H) each
-        lib.gru_backward[gates.dtype](T, B, H, _ptr(gates), _ptr(hs), _ptr(hn), _ptr(weight_hh.detach().contiguous()),
-                                      _ptr(d_out), _ptr(dh), _ptr(d_x), _ptr(d_s), lib.blas[gates.dtype])
+        lib.gru_backward[gates.dtype](T, B, H, native.ptr(gates), native.ptr(hs), native.ptr(hn), native.ptr(weight_hh.detach().contiguous()),
+                                      native.ptr(d_out), native.ptr(dh), native.ptr(d_x), native.ptr(d_s), lib.blas[gates.dtype])
         need = ctx.needs_input_grad
         dx = (d_x @ weight_ih).transpose(0, 1) if need[0] else None  # (B, T, D)
         flat_x, flat_s = d_x.reshape(T * B, H3), d_s.reshape(T * B, H3)

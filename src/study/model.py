@@ -22,7 +22,6 @@ Shapes: B batch, T frames, D input dims (1 for Z, 3 for XYZ), H hidden units, L 
 
 from __future__ import annotations
 
-import ctypes
 import math
 
 import torch
@@ -122,13 +121,6 @@ def _recurrence(
     return gates, cs, hs, tcs
 
 
-def _time_major_grad(d_out: torch.Tensor | None, like: torch.Tensor, T: int, B: int, H: int) -> torch.Tensor:
-    """Our own contiguous time-major (T, B, H) copy of dL/dh_t from above (the loops add into it)."""
-    if d_out is None:
-        return like.new_zeros(T, B, H)
-    return d_out.transpose(0, 1).clone(memory_format=torch.contiguous_format)
-
-
 def _backward_loop(
     d_out: torch.Tensor | None, d_h: torch.Tensor | None, d_c: torch.Tensor | None, gates: torch.Tensor,
     cs: torch.Tensor, hs: torch.Tensor, tcs: torch.Tensor, weight_hh: torch.Tensor,
@@ -150,7 +142,8 @@ def _backward_loop(
     torch.addcmul(f, f, f, value=-1, out=k_f).mul_(c_old)  # c_{t-1} f (1 - f)
     torch.addcmul(torch.ones_like(w_ci), g, g, value=-1, out=k_g).mul_(i)  # i (1 - g^2)
     f_c = torch.addcmul(f, k_i, w_ci).addcmul_(k_f, w_cf)  # dL/dc_{t-1} = dc_t * f_c
-    d_out = _time_major_grad(d_out, gates, T, B, H)  # the recurrent matmul adds into it in place
+    d_out = native.own(None if d_out is None else d_out.transpose(0, 1), gates, (T, B, H))  # time-major; the
+    # recurrent matmul adds into it in place
     dh = d_out[-1] + d_h if d_h is not None else d_out[-1].clone()
     dc = d_c.clone() if d_c is not None else gates.new_zeros(B, H)
     d_gates = torch.empty_like(gates)  # (T, B, 4H) gradients of the pre-activations
@@ -183,10 +176,6 @@ def _native_for(xw: torch.Tensor) -> native.Native | None:
     return native.active()
 
 
-def _ptr(t: torch.Tensor) -> ctypes.c_void_p:
-    return ctypes.c_void_p(t.data_ptr())
-
-
 def _recurrence_native(
     lib: native.Native, xw: torch.Tensor, h0: torch.Tensor, c0: torch.Tensor, weight_hh: torch.Tensor,
     w_ci: torch.Tensor, w_cf: torch.Tensor, w_co: torch.Tensor,
@@ -199,7 +188,7 @@ def _recurrence_native(
     tcs = xw.new_empty(T, B, H)
     cs[0], hs[0] = c0, h0
     w = [t.detach().contiguous() for t in (weight_hh.t(), w_ci, w_cf, w_co)]  # weight_hh transposed: (H, 4H)
-    lib.forward[xw.dtype](T, B, H, _ptr(xw), *map(_ptr, w), _ptr(cs), _ptr(hs), _ptr(tcs), lib.blas[xw.dtype])
+    lib.forward[xw.dtype](T, B, H, native.ptr(xw), *map(native.ptr, w), native.ptr(cs), native.ptr(hs), native.ptr(tcs), lib.blas[xw.dtype])
     return xw, cs, hs, tcs
 
 
@@ -212,14 +201,13 @@ def _backward_native(
     returns the peephole and bias gradients (w_ci, w_cf, w_co, bias), summed inside the loop."""
     T, B, H4 = gates.shape
     H = H4 // 4
-    d_out = _time_major_grad(d_out, gates, T, B, H)
-    dh = d_h.clone(memory_format=torch.contiguous_format) if d_h is not None else gates.new_zeros(B, H)
-    dc = d_c.clone(memory_format=torch.contiguous_format) if d_c is not None else gates.new_zeros(B, H)
+    d_out = native.own(None if d_out is None else d_out.transpose(0, 1), gates, (T, B, H))  # time-major
+    dh, dc = native.own(d_h, gates, (B, H)), native.own(d_c, gates, (B, H))
     d_gates = torch.empty_like(gates)
     d_small = gates.new_empty(7 * H)
     w = [t.detach().contiguous() for t in (weight_hh, w_ci, w_cf, w_co)]
-    lib.backward[gates.dtype](T, B, H, _ptr(gates), _ptr(cs), _ptr(tcs), *map(_ptr, w), _ptr(d_out), _ptr(dh),
-                              _ptr(dc), _ptr(d_gates), _ptr(d_small), lib.blas[gates.dtype])
+    lib.backward[gates.dtype](T, B, H, native.ptr(gates), native.ptr(cs), native.ptr(tcs), *map(native.ptr, w), native.ptr(d_out), native.ptr(dh),
+                              native.ptr(dc), native.ptr(d_gates), native.ptr(d_small), lib.blas[gates.dtype])
     d_w_ci, d_w_cf, d_w_co, d_bias = d_small.split((H, H, H, 4 * H))
     return d_gates, dh, dc, (d_w_ci, d_w_cf, d_w_co, d_bias)
 

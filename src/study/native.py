@@ -34,11 +34,11 @@ _HERE = Path(__file__).resolve().parent
 SOURCES = (_HERE / "peephole.cpp", _HERE / "gru.cpp")
 """Compiled together into one library; both include ``rnn_math.h``."""
 HEADER = _HERE / "rnn_math.h"
+FILES = (*SOURCES, HEADER)
+"""Every file the library is built from: its build key, and the training runs' cache keys, hash them all."""
 FLAGS = ["-O3", "-march=native", "-fno-math-errno", "-fno-trapping-math", "-ffp-contract=fast",
          "-funsafe-math-optimizations", "-ffinite-math-only", "-fschedule-insns", "-fsched-pressure",
-         "-fPIC", "-shared", "-std=c++17"]
-if platform.machine().lower() in ("x86_64", "amd64"):
-    FLAGS.append("-mrecip=vec-div")
+         "-fPIC", "-shared", "-std=c++17"] + (["-mrecip=vec-div"] if platform.machine().lower() in ("x86_64", "amd64") else [])
 """Compiler flags. ``-march=native`` lets the loops use this CPU's vector width (hence the CPU in the key).
 The unsafe-math pair lets ``-mrecip`` turn the gates' float divisions into a reciprocal estimate plus a
 Newton step (about 2x faster forward loop on x86-64; relative error ~1e-7, as the exp); the scheduling
@@ -58,6 +58,17 @@ class Native:
         for fn in (*self.forward.values(), *self.backward.values(), *self.gru_forward.values(),
                    *self.gru_backward.values()):
             fn.restype = None
+
+
+def ptr(t: torch.Tensor) -> ctypes.c_void_p:
+    """The address of a contiguous tensor's data, as the compiled loops take it."""
+    return ctypes.c_void_p(t.data_ptr())
+
+
+def own(grad: torch.Tensor | None, like: torch.Tensor, shape: tuple[int, ...]) -> torch.Tensor:
+    """Our own contiguous copy of an incoming gradient (zeros of ``shape`` where autograd passes None):
+    the loops write into it in place, so it must not alias autograd's tensor."""
+    return like.new_zeros(shape) if grad is None else grad.clone(memory_format=torch.contiguous_format)
 
 
 def cache_dir() -> Path:
@@ -100,7 +111,7 @@ def _blas() -> tuple[int, int] | None:
 
 
 def _build(cxx: str, version: str) -> Path:
-    source = b"\0".join(f.read_bytes() for f in (*SOURCES, HEADER))
+    source = b"\0".join(f.read_bytes() for f in FILES)
     key = hashlib.sha256(b"\0".join([source, version.encode(), " ".join(FLAGS).encode(), _cpu().encode(),
                                      platform.machine().encode()])).hexdigest()[:16]
     target = cache_dir() / f"rnn-{key}.so"
