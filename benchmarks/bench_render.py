@@ -20,7 +20,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from study import realworld, render, synth
+from study import realworld
+from study.see import render
+from study.simulate import synth
 
 
 def main() -> None:

@@ -14,7 +14,7 @@ import argparse
 import os
 import time
 
-from study import synth
+from study.simulate import synth
 
 
 def main() -> None:

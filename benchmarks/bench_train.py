@@ -1,13 +1,13 @@
 """Training speed of the paper's peephole LSTM against nn.LSTM of the same size, in one run.
 
-Both are the full classifier of ``study.model`` (2 layers x 64 units, dropout, linear head) on
+Both are the full classifier of ``study.learn.model`` (2 layers x 64 units, dropout, linear head) on
 random inputs of shape (B, T, 3); one training step is forward + backward (full BPTT) + Adam. Prints,
 for T = 90 and 300 frames: ms per step, sequences per second, the time of one epoch of the paper's
 training set (1600 sequences), and the peephole/nn.LSTM throughput ratio (1.0 = as fast as the
-vendor kernel; issue 5's target is >= 0.7 on CPU, >= 0.5 on GPU). On CPU a third row, ``peephole-pt``,
+vendor kernel). On CPU a third row, ``peephole-pt``,
 times the same layer with its time loop as PyTorch operations instead of the compiled loop of
-``study.native`` (the plain baseline of that kernel), and two more the GRU of the ablation: ``gru`` on
-its compiled loop (:mod:`study.gru`), ``gru-pt`` as plain ``nn.GRU``. Also the streaming cost: one
+``study.learn.native`` (the plain baseline of that kernel), and two more the GRU of the ablation: ``gru`` on
+its compiled loop (:mod:`study.learn.gru`), ``gru-pt`` as plain ``nn.GRU``. Also the streaming cost: one
 frame's update of a single trajectory's state. Batch 32 as well on CPU (the training default). On
 CUDA too when a GPU is present (batch 128 and 1024).
 
@@ -24,9 +24,9 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from study import native
-from study.model import Classifier
-from study.stream import Streamer
+from study.learn import native
+from study.learn.model import Classifier
+from study.learn.stream import Streamer
 
 EPOCH_SEQUENCES = 1600
 """Training sequences per epoch at paper scale (2000 train trajectories minus a 20 % validation part)."""
@@ -82,7 +82,7 @@ def time_stream(cell: str, frames: int) -> float:
 
 
 def time_streamer(frames: int, repeats: int = 5) -> float:
-    """Seconds per streamed frame of one trajectory with the NumPy :class:`study.stream.Streamer`
+    """Seconds per streamed frame of one trajectory with the NumPy :class:`study.learn.stream.Streamer`
     (best of ``repeats`` passes over ``frames`` frames, returning class probabilities every frame)."""
     torch.manual_seed(0)
     s = Streamer(Classifier(3).eval())

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from study import data
+from study.simulate import data
 
 
 def bounces(n: int, T: int, seed: int = 0, fps: float = 30.0) -> tuple[np.ndarray, np.ndarray]:

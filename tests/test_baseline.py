@@ -1,11 +1,11 @@
 """The physics baseline: its restitution estimate on an exact bounce, and its logistic regression."""
 
+import model_toys
 import numpy as np
 import pytest
 
-import model_toys
-from study import baseline
 from study.errors import ConfigError, TrajectoryError
+from study.learn import baseline
 
 
 def exact_bounce(e: float, h0: float = 1.0, rest: float = 0.1, fps: float = 240.0, seconds: float = 3.0) -> np.ndarray:

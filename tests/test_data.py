@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from study import data
 from study.errors import DataError
+from study.simulate import data
 
 
 def toy_dataset(n: int = 4, T: int = 10) -> data.Dataset:

@@ -3,12 +3,13 @@
 import dataclasses
 import json
 
+import model_toys
 import numpy as np
 import pytest
 
-import model_toys
-from study import experiments, train
+from study import experiments
 from study.errors import ConfigError
+from study.learn import train
 
 TINY = experiments.Preset(
     name="tiny", length=0.5, lrs=(1e-2,), truncations=(5, 15), dropouts=(0.2,), batch_sizes=(8,),
@@ -23,6 +24,7 @@ def ds():
 
 
 
+@pytest.mark.slow
 def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
     grid = experiments.grid(ds, TINY, tmp_path, progress=False)
     assert [(r["truncation"]) for r in grid] == [5, 15] and all("accuracy" not in r for r in grid), \
@@ -54,6 +56,7 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
     assert not list((tmp_path / "runs").glob(".*tmp"))
 
 
+@pytest.mark.slow
 def test_test_run_scores_the_kept_model_of_the_same_run_without_test(tmp_path, ds, monkeypatch):
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     trained = experiments.run(ds, cfg, tmp_path / "a", test=True)  # trained from scratch
@@ -69,6 +72,7 @@ def test_test_run_scores_the_kept_model_of_the_same_run_without_test(tmp_path, d
     assert experiments.cached(ds, cfg, tmp_path / "b", test=True) == scored
 
 
+@pytest.mark.slow
 def test_run_record_and_key(tmp_path, ds):
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     rec = experiments.run(ds, cfg, tmp_path)
@@ -85,6 +89,7 @@ def test_run_record_and_key(tmp_path, ds):
     assert again["test"] == rec["test"], "a damaged cache entry is retrained, with the same result"
 
 
+@pytest.mark.slow
 def test_ablation_and_baseline(tmp_path, ds):
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     rows = experiments.ablation(ds, cfg, dataclasses.replace(TINY, seeds=(0,)), tmp_path, progress=False)

@@ -1,13 +1,13 @@
-"""The compiled GRU (study.gru) against nn.GRU itself: same initialisation, outputs and gradients."""
+"""The compiled GRU (study.learn.gru) against nn.GRU itself: same initialisation, outputs and gradients."""
 
 import contextlib
 
 import pytest
 import torch
 
-from study import native
-from study.gru import GRU, GRUFunction
-from study.model import Classifier
+from study.learn import native
+from study.learn.gru import GRU, GRUFunction
+from study.learn.model import Classifier
 
 pytestmark = pytest.mark.skipif(native.load() is None, reason="no compiled loop here (no C++ compiler)")
 
@@ -70,6 +70,7 @@ def test_same_initialisation_and_state_dict_as_nn_gru():
     assert all(torch.equal(a, b) for a, b in zip(ours.state_dict().values(), theirs.state_dict().values()))
 
 
+@pytest.mark.slow
 def test_gru_classifier_trains_on_the_compiled_loop_and_falls_back_elsewhere(monkeypatch):
     torch.manual_seed(0)
     net = Classifier(3, hidden=8, cell="gru")

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 import torch
 
-from study import native
 from study.errors import ConfigError, TrajectoryError
-from study.model import CELLS, Classifier, PeepholeLSTM, peephole_reference
-from study.stream import Streamer
+from study.learn import native
+from study.learn.model import CELLS, Classifier, PeepholeLSTM, peephole_reference
+from study.learn.stream import Streamer
 
 
 @pytest.fixture(params=["native", "torch"])
@@ -239,3 +239,27 @@ def test_native_falls_back_with_a_warning_when_it_cannot_compile(monkeypatch, tm
         out, _ = layer(torch.randn(2, 5, 3))  # still runs, on the PyTorch loop
     assert out.shape == (2, 5, 4)
     native.load.cache_clear()  # later tests load the real kernel again
+
+
+def test_every_native_entry_point_checks_its_arguments():
+    """argtypes/restype are declared: a wrong call raises in Python instead of crashing in C."""
+    import ctypes
+
+    lib = native.load()
+    if lib is None:
+        pytest.skip("the compiled loop is not available here (no C++ compiler)")
+    for name, n_pointers in native.SIGNATURES.items():
+        fn = getattr(lib.lib, name)
+        assert fn.restype is None and len(fn.argtypes) == 3 + n_pointers, name
+        with pytest.raises(TypeError):
+            fn(1, 1, 1)  # too few arguments
+        with pytest.raises(ctypes.ArgumentError):
+            fn(1, 1, 1, *([torch.zeros(4)] * n_pointers))  # a tensor, not its address
+
+
+def test_native_build_goes_to_the_platform_cache(monkeypatch, tmp_path):
+    monkeypatch.delenv("STUDY_NATIVE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert native.cache_dir() == tmp_path / "study" / "native"
+    monkeypatch.setenv("STUDY_NATIVE_DIR", str(tmp_path / "elsewhere"))
+    assert native.cache_dir() == tmp_path / "elsewhere"

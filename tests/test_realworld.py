@@ -7,8 +7,10 @@ import os
 import numpy as np
 import pytest
 
-from study import realworld, render, synth
+from study import realworld
 from study.errors import ConfigError, DataError
+from study.see import render
+from study.simulate import synth
 
 
 class HeightRangeModel:
@@ -101,6 +103,7 @@ def test_untrackable_video_is_a_row_not_a_crash(tmp_path):
     assert np.isnan(realworld.per_class_accuracy(rows)["light"])
 
 
+@pytest.mark.slow
 def test_rendered_motion_is_the_datasets_trajectory(smoke_cfg, smoke_dataset):
     cfg, split = smoke_cfg, smoke_dataset.train
     model, qpos, qvel = render.synth_model(cfg, split.params, 0)
@@ -110,6 +113,7 @@ def test_rendered_motion_is_the_datasets_trajectory(smoke_cfg, smoke_dataset):
     assert [f.shape for f in frames] == [(48, 64, 3)] * 2 and frames[0].dtype == np.uint8
 
 
+@pytest.mark.slow
 def test_renders_without_mujoco_gl_in_the_environment():
     """A plain `python` with MUJOCO_GL unset renders too: importing study sets the headless default
     before any module imports mujoco (mujoco reads it once, at its first import)."""

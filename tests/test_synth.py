@@ -7,8 +7,8 @@ import sys
 import numpy as np
 import pytest
 
-from study import data, synth
 from study.errors import ConfigError, DataError
+from study.simulate import data, synth
 
 
 @pytest.fixture(scope="module")
@@ -126,7 +126,7 @@ def test_bad_config_names_the_field(smoke_cfg, change, field):
 
 
 def test_unknown_preset_and_class(smoke_cfg):
-    with pytest.raises(ConfigError, match="unknown preset"):
+    with pytest.raises(ConfigError, match="preset = .huge. is unknown"):
         synth.SynthConfig.preset("huge")
     with pytest.raises(ConfigError, match="unknown class"):
         smoke_cfg.prior("medium")

@@ -3,18 +3,20 @@
 from __future__ import annotations
 
 import csv
-import sys
-import types
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
-from study import cli, render, track
+import model_toys
+from study import cli, realworld
 from study.errors import ConfigError, TrackingError, VideoError
+from study.learn import train
+from study.see import render, track, video
+from study.simulate import measure
 
-REAL = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "real-video"
+REAL = realworld.real_clips_dir()
 FAST = track.TrackConfig(color="orange", progress=False)
 
 
@@ -64,7 +66,7 @@ def test_projection_agrees_with_truth_and_camera_axis(rendered):
 
 
 def test_timestep_must_divide_frame_period():
-    from study.scene import Shape, compile_scene
+    from study.simulate.scene import Shape, compile_scene
 
     m = compile_scene(Shape(), mass=1.0, damping=100, stiffness=2.5e5, friction=0.5, timestep=1 / 1000)
     with pytest.raises(ConfigError, match="does not divide"):
@@ -122,14 +124,6 @@ def test_calibration_and_model_input(tmp_path):
     assert track.to_model_input(traj, fps=30.0, n_frames=10).shape == (10, 3)  # cut
 
 
-def test_bounces_counted():
-    t = np.arange(90) / 30
-    h = np.abs(np.sin(np.pi * t * 1.5)) * np.exp(-t)  # touch-downs at 2/3, 4/3, 2 and 8/3 s; the last too small
-    traj = track.Trajectory(t=t, u=t, v=-h, status=np.ones(90, np.int8), segment=np.zeros(90, np.int32),
-                            confidence=np.ones(90), diameter=np.ones(90), ground_v=0.0)
-    assert track.bounces(traj).tolist() == [20, 40, 60]
-
-
 def test_csv_round_trip_and_overlay(rendered, tmp_path):
     traj = track.track_video(rendered.video, FAST, object_size=0.2)
     out = track.write_csv(traj, tmp_path / "t.csv")
@@ -137,7 +131,7 @@ def test_csv_round_trip_and_overlay(rendered, tmp_path):
     np.testing.assert_allclose(back.height, traj.height, atol=1e-4, equal_nan=True)
     assert back.units == "m" and (back.status == traj.status).all() and back.fps == pytest.approx(30.0)
     ov = track.write_overlay(traj, tmp_path / "ov.mp4")
-    assert track.probe(ov).width == 320 and track.probe(ov).frames == len(traj.t)
+    assert video.probe(ov).width == 320 and video.probe(ov).frames == len(traj.t)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ov.mp4", "t.csv"]  # no temporary files left
 
 
@@ -221,49 +215,37 @@ def test_cli_hsv_out_of_range_exits_2(rendered, capsys):
     assert rc == 2 and "hsv" in capsys.readouterr().err
 
 
-class StubModel:
-    """The trained-model contract of study.train, for the classify command only."""
-
-    dims, fps, n_frames = "z", 30.0, 60
-
-    def __init__(self):
-        self.seen = None
-
-    def predict_proba(self, x):
-        assert x.shape == (1, self.n_frames, 3) and x.dtype == np.float32
-        self.seen = x
-        p_heavy = 1.0 / (1.0 + np.exp(20 * (np.ptp(x[0, :, 2]) - 0.5)))  # big height swings -> light
-        return np.array([[1 - p_heavy, p_heavy]], np.float32)
+@pytest.fixture(scope="module")
+def z_model(tmp_path_factory) -> tuple[Path, train.TrainedModel]:
+    """A real Z-only model, trained in a second on toy bounces (what it predicts does not matter here)."""
+    cfg = train.TrainConfig(dims="z", length=2.0, hidden=8, max_epochs=1, batch_size=8, truncation=10)
+    tm = train.fit(model_toys.dataset(n=16, T=60), cfg, progress=False)
+    return tm.save(tmp_path_factory.mktemp("model") / "z"), tm
 
 
-@pytest.fixture
-def stub_train(monkeypatch):
-    stub = StubModel()
-    mod = types.ModuleType("study.train")
-    mod.load = lambda d: stub
-    monkeypatch.setitem(sys.modules, "study.train", mod)
-    import study
-
-    monkeypatch.setattr(study, "train", mod, raising=False)
-    return stub
-
-
-def test_cli_classify_video_and_csv(rendered, tmp_path, stub_train, capsys):
-    rc = cli.main(["classify", "--model", str(tmp_path), str(rendered.video), "--color", "orange",
+def test_cli_classify_video_and_csv(rendered, tmp_path, z_model, capsys):
+    """The command prints the model's own answer for the tracked height, in metres (not pixels)."""
+    folder, tm = z_model
+    rc = cli.main(["classify", "--model", str(folder), str(rendered.video), "--color", "orange",
                    "--object-size", "0.2", "--no-progress"])
     out = capsys.readouterr().out.strip().splitlines()
-    assert rc == 0 and len(out) == 1 and out[0].split(": ")[1].startswith("light (p = ")
-    assert stub_train.seen[0, :, 2].max() > 0.6  # metres: the box was thrown from 1 m
+    traj = track.track_video(rendered.video, FAST, object_size=0.2)
+    x = track.to_model_input(traj, tm.fps, tm.n_frames, rest_height=0.1)
+    assert x[:, 2].max() > 0.6  # metres: the box was thrown from 1 m
+    p = tm.predict_proba(x[None])[0]
+    k = int(p.argmax())
+    assert rc == 0 and out == [f"{rendered.video}: {('light', 'heavy')[k]} (p = {p[k]:.3f})"]
     track.write_csv(track.track_video(rendered.video, FAST), tmp_path / "px.csv")
-    rc = cli.main(["classify", "--model", str(tmp_path), str(tmp_path / "px.csv")])
+    rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv")])
     assert rc == 2 and "pixels" in capsys.readouterr().err  # a pixel CSV needs a scale
-    rc = cli.main(["classify", "--model", str(tmp_path), str(tmp_path / "px.csv"), "--metres-per-pixel", "0.01"])
-    assert rc == 0 and "light" in capsys.readouterr().out
+    rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv"), "--metres-per-pixel", "0.01"])
+    assert rc == 0 and "(p = " in capsys.readouterr().out
 
 
-def test_cli_classify_rejects_xyz_model(rendered, tmp_path, stub_train, capsys):
-    stub_train.dims = "xyz"
-    rc = cli.main(["classify", "--model", str(tmp_path), str(rendered.video), "--color", "orange"])
+def test_cli_classify_rejects_xyz_model(rendered, tmp_path, capsys):
+    cfg = train.TrainConfig(dims="xyz", length=0.5, hidden=4, max_epochs=1, batch_size=8, truncation=5)
+    folder = train.fit(model_toys.dataset(n=8, T=15), cfg, progress=False).save(tmp_path / "xyz")
+    rc = cli.main(["classify", "--model", str(folder), str(rendered.video), "--color", "orange"])
     assert rc == 2 and "'z'" in capsys.readouterr().err
 
 
@@ -280,13 +262,14 @@ def _manifest() -> list[dict]:
 @pytest.mark.slow
 @pytest.mark.parametrize("name", [r["file"] for r in _manifest() if r["width"] == "320"] + ["tennis_table_drop.mp4"])
 def test_real_clip_ball_found_and_bounces(name):
-    traj = track.track_video(REAL / name, track.TrackConfig(color="tennis", progress=False))
+    traj = track.track_video(REAL / name, track.TrackConfig(color="tennis", progress=False),
+                             object_size=realworld.TENNIS_BALL)
     longest = traj.longest()
     # In the 320x240 clips the ball is out of the picture (not yet thrown, above the top, gone) for
     # up to half the frames; inside the throw it is measured in nearly every frame.
     assert traj.found_fraction >= (0.95 if name == "tennis_table_drop.mp4" else 0.45), traj.found_fraction
     assert len(longest.t) >= 40 and longest.measured.mean() >= 0.9
-    assert len(track.bounces(longest)) >= 2  # the height series of one piece shows at least two bounces
+    assert measure.bounce_count(longest.height) >= 2  # the height series of one piece shows at least two bounces
 
 
 def test_render_is_deterministic(tmp_path):

@@ -1,14 +1,22 @@
 """Can a car tell a must-avoid object from a safe-to-pass one by its motion alone?
 
-A reproduction of Fathollahi & Kasturi, arXiv:1609.00361, as a package:
+A reproduction of Fathollahi & Kasturi, arXiv:1609.00361, as a package in three layers and a top:
 
-- ``study.synth``: MuJoCo trajectories of light (bouncy) and heavy (sliding) objects.
-- ``study.book``: execute the chapters with papermill and build the Jupyter Book.
+- ``study.simulate``: MuJoCo trajectories of light (bouncy) and heavy (sliding) objects, the dataset
+  file, physics checks and measurements on trajectories.
+- ``study.learn``: the paper's peephole LSTM (with its compiled time loops), training, evaluation,
+  frame-by-frame streaming and a physics baseline.
+- ``study.see``: video files, MuJoCo renders with ground truth, and the colour tracker.
+- On top: ``study.experiments`` (the runs behind every table and figure), ``study.realworld`` (the
+  video experiment), ``study.book`` (papermill and Jupyter Book) and ``study.cli`` (the command).
 
-Submodules are imported on demand (``from study import synth``) so that ``import study`` stays cheap.
+Every module is imported on demand, so ``import study`` stays cheap, and the modules users reach for
+have short names: ``from study import synth, train, track`` is ``study.simulate.synth`` and so on.
 """
 
+import importlib
 import os
+from types import ModuleType
 
 # Headless rendering by default: MuJoCo reads MUJOCO_GL when it is first imported, which any submodule
 # may do (set MUJOCO_GL=osmesa, or glfw with a display, before importing study to choose otherwise).
@@ -18,3 +26,18 @@ __version__ = "0.1.0"
 
 CLASSES: tuple[str, str] = ("light", "heavy")
 """Class names by label: 0 = light (bounces; safe to pass over), 1 = heavy (slides; must avoid)."""
+
+SHORT_NAMES: dict[str, str] = {
+    **{m: f"study.simulate.{m}" for m in ("scene", "contact", "synth", "data", "checks", "measure")},
+    **{m: f"study.learn.{m}" for m in ("config", "metrics", "model", "native", "gru", "train", "stream", "baseline")},
+    **{m: f"study.see.{m}" for m in ("video", "render", "track")},
+}
+"""``study.<short>`` -> the module it names, for ``from study import synth`` and friends."""
+
+
+def __getattr__(name: str) -> ModuleType:
+    if name in SHORT_NAMES:
+        module = importlib.import_module(SHORT_NAMES[name])
+        globals()[name] = module
+        return module
+    raise AttributeError(f"module 'study' has no attribute {name!r}")

@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from study.errors import output_error
+
 PACKAGE_DIR = Path(__file__).resolve().parent
 
 
@@ -44,18 +46,28 @@ def key(obj: Any, length: int = 16) -> str:
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:length]
 
 
-def source_hash(*module_names: str) -> str:
-    """Hash of the source files of the named ``study`` modules (``"synth"``, or a file such as
-    ``"peephole.cpp"``), or of all of them (every ``.py``, ``.cpp`` and ``.h`` file of the package).
+SOURCE_SUFFIXES = (".py", ".cpp", ".h")
+"""What counts as the package's source for :func:`source_hash`."""
 
-    Part of every cache key, so a change to the code that made a file makes a new file.
+
+def source_files(root: Path = PACKAGE_DIR) -> list[str]:
+    """Every source file of the package under ``root``, subpackages included, as sorted relative paths."""
+    return sorted(p.relative_to(root).as_posix() for p in root.rglob("*")
+                  if p.suffix in SOURCE_SUFFIXES and p.is_file() and "__pycache__" not in p.parts)
+
+
+def source_hash(*names: str, root: Path = PACKAGE_DIR) -> str:
+    """Hash of the named source files of the package, or of all of them (:func:`source_files`).
+
+    A name is a module relative to the package (``"simulate.synth"``) or a file path relative to it
+    (``"learn/peephole.cpp"``). Part of every cache key, so a change to the code that made a file makes
+    a new file. ``root``: the package folder (for tests on a copy of it).
     """
-    names = module_names or tuple(sorted(p.stem if p.suffix == ".py" else p.name for p in PACKAGE_DIR.iterdir()
-                                         if p.suffix in (".py", ".cpp", ".h")))
+    paths = [n if "/" in n or n.endswith(SOURCE_SUFFIXES) else n.replace(".", "/") + ".py" for n in names]
     h = hashlib.sha256()
-    for name in names:
-        h.update(name.encode())
-        h.update((PACKAGE_DIR / (name if "." in name else f"{name}.py")).read_bytes())
+    for rel in paths or source_files(root):
+        h.update(rel.encode())
+        h.update((root / rel).read_bytes())
     return h.hexdigest()[:16]
 
 
@@ -73,11 +85,16 @@ def array_checksum(arrays: Mapping[str, np.ndarray]) -> str:
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success, fsync it and rename it onto ``path``.
 
-    On any exception the temporary file is removed and ``path`` is left as it was.
+    On any exception the temporary file is removed and ``path`` is left as it was. A destination that
+    cannot be written (its folder cannot be made, is read-only, lies under a file) raises
+    :class:`study.errors.OutputError` naming it.
     """
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    except OSError as e:
+        raise output_error(target, e) from None
     os.close(fd)
     tmp = Path(tmp_name)
     try:

@@ -7,13 +7,39 @@ one line, ``study: error: ...``, and returns 2. Anything else is a bug and keeps
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import re
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from study.errors import StudyError
+from study import presets
+from study.errors import StudyError, check_writable
+from study.fielddoc import field_docs
 
-Handler = Callable[[argparse.Namespace], int]
+
+def _plain(doc: str) -> str:
+    """A docstring as ``--help`` text: reST roles and literals as plain words, ``%`` escaped for argparse."""
+    return re.sub(r":\w+:`~?([^`]*)`", r"\1", doc).replace("``", "'").replace("%", "%%")
+
+
+def _add_fields(p: argparse.ArgumentParser, cls: type, names: Sequence[str], *, flags: dict[str, str] | None = None,
+                choices: dict[str, Sequence[str]] | None = None) -> None:
+    """One option per field of the config dataclass ``cls``, its default, type and help taken from the field
+    itself (its docstring is the help), so the command line cannot drift from the config."""
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    docs = field_docs(cls)
+    for name in names:
+        default = fields[name].default
+        help_text = _plain(docs[name]) + " (default: %(default)s)"
+        extra = {"choices": choices[name]} if choices and name in choices else {}
+        flag = (flags or {}).get(name, "--" + name.replace("_", "-"))
+        p.add_argument(flag, dest=name, type=type(default), default=default, help=help_text, **extra)
+
+
+def _add_preset(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument("--preset", choices=presets.NAMES, default=presets.DEFAULT,
+                   help=f"{what}: {presets.describe()} (default: %(default)s)")
 
 
 def _add_synth(sub: argparse._SubParsersAction) -> None:
@@ -27,13 +53,7 @@ def _add_synth(sub: argparse._SubParsersAction) -> None:
             "when it already exists. Prints the path of the dataset."
         ),
     )
-    p.add_argument(
-        "--preset",
-        choices=["smoke", "paper"],
-        default="paper",
-        help="dataset size: 'paper' = 1000 train + 1000 test trajectories per class, 10 s each; "
-        "'smoke' = a few short trajectories, for tests (default: %(default)s)",
-    )
+    _add_preset(p, "dataset size")
     p.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
     p.add_argument(
         "--out",
@@ -46,9 +66,11 @@ def _add_synth(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
-        from study import synth
+        from study.simulate import synth
 
         cfg = synth.SynthConfig.preset(a.preset)
+        if a.out is not None:
+            check_writable(a.out, "dataset")
         path = synth.generate_to_file(
             cfg, seed=a.seed, out=a.out, data_dir=a.data_dir, threads=a.threads, progress=not a.no_progress
         )
@@ -73,13 +95,7 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
             "_build/executed/timings.json. Prints the path of index.html."
         ),
     )
-    p.add_argument(
-        "--preset",
-        choices=["smoke", "paper"],
-        default="paper",
-        help="injected as the chapters' 'preset' parameter: 'paper' = the paper's scale; 'smoke' = "
-        "tiny runs, for tests (default: %(default)s)",
-    )
+    _add_preset(p, "injected as the chapters' 'preset' parameter")
     p.add_argument("--force", action="store_true", help="re-execute every chapter even if its cached copy is current")
     p.add_argument(
         "--only",
@@ -108,14 +124,9 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-# study.train.TrainConfig's defaults, repeated so that `study --help` need not import torch (2-3 s);
-# tests/test_train.py checks that the two agree.
-_TRAIN_DEFAULTS = argparse.Namespace(seed=0, cell="peephole", max_epochs=60, lr=3e-3, batch_size=32,
-                                     truncation=30, dropout=0.2, patience=10)
-
-
 def _add_train(sub: argparse._SubParsersAction) -> None:
-    d = _TRAIN_DEFAULTS
+    from study.learn.config import CELLS, DIMS, TrainConfig  # no torch: `study --help` stays fast
+
     p = sub.add_parser(
         "train",
         help="train the paper's classifier on a dataset file and save it as a model directory",
@@ -123,42 +134,56 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
             "Train the light/heavy classifier (2 x 64 peephole LSTM, dropout, softmax on the last "
             "frame) on the train split of a dataset file, early-stopping on a seeded validation part "
             "of it; the test split is not touched. Deterministic for a given seed. Writes the model "
-            "directory (weights, config, normalisation, history, data key) atomically."
+            "directory (weights, config, normalisation, history, data key) atomically. Every option "
+            "below is a field of study.learn.config.TrainConfig, with its default."
         ),
     )
     p.add_argument("--data", type=Path, required=True, help="dataset file (.npz) written by `study synth`")
-    p.add_argument("--dims", choices=["xyz", "z"], required=True, help="input coordinates: all three, or the height only")
-    p.add_argument("--length", type=float, required=True, metavar="SECONDS",
-                   help="input length: the first SECONDS of every trajectory (must not exceed the data)")
-    p.add_argument("--seed", type=int, default=d.seed, help="seed of the split, weights, batches, dropout (default: %(default)s)")
-    p.add_argument("--cell", choices=["peephole", "no-peephole", "lstm", "gru"], default=d.cell,
-                   help="recurrent cell: the paper's peephole LSTM, the same layer without peepholes, nn.LSTM or "
-                        "nn.GRU (default: %(default)s)")
-    p.add_argument("--epochs", type=int, default=d.max_epochs, help="most epochs; early stopping may end sooner (default: %(default)s)")
-    p.add_argument("--lr", type=float, default=d.lr, help="Adam learning rate (default: %(default)s)")
-    p.add_argument("--batch-size", type=int, default=d.batch_size, help="trajectories per step (default: %(default)s)")
-    p.add_argument("--truncation", type=int, default=d.truncation, metavar="FRAMES",
-                   help="truncated BPTT: the loss back-propagates through at most this many last frames (default: %(default)s)")
-    p.add_argument("--dropout", type=float, default=d.dropout,
-                   help="probability of dropping a unit before the softmax; 0.2 = the paper's keep-probability 0.8 (default: %(default)s)")
-    p.add_argument("--patience", type=int, default=d.patience, help="early-stopping patience in epochs (default: %(default)s)")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="model directory to write (replaced if it exists)")
+    p.add_argument("--dims", choices=list(DIMS), required=True, help=_plain(field_docs(TrainConfig)["dims"]))
+    p.add_argument("--length", type=float, required=True, metavar="SECONDS", help=_plain(field_docs(TrainConfig)["length"]))
+    _add_fields(p, TrainConfig, ["seed", "cell", "max_epochs", "lr", "batch_size", "truncation", "dropout", "patience",
+                                 "hidden", "layers", "val_fraction"],
+                flags={"max_epochs": "--epochs"}, choices={"cell": CELLS})
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
         import json
 
-        from study import data, train
+        from study.learn import train
+        from study.simulate import data
 
+        check_writable(a.out / "weights.pt", "model directory")
         ds = data.load(a.data)
-        cfg = train.TrainConfig(dims=a.dims, length=a.length, seed=a.seed, cell=a.cell, max_epochs=a.epochs, lr=a.lr,
-                          batch_size=a.batch_size, truncation=a.truncation, dropout=a.dropout, patience=a.patience)
+        fields = {f.name for f in dataclasses.fields(TrainConfig)}
+        cfg = TrainConfig(**{k: v for k, v in vars(a).items() if k in fields})
         tm = train.fit(ds, cfg, progress=not a.no_progress)
         tm.save(a.out)
         print(json.dumps({"model": str(a.out), "best_epoch": tm.best_epoch, "val_accuracy": tm.val_accuracy}))
         return 0
 
     p.set_defaults(run=run)
+
+
+def _add_tracker_options(p: argparse.ArgumentParser) -> None:
+    """The colour tracker's options (fields of ``study.see.config.TrackConfig``), shared by track and classify."""
+    from study.see.config import PRESETS, TrackConfig  # no OpenCV
+
+    g = p.add_mutually_exclusive_group()
+    _add_fields(g, TrackConfig, ["color"], choices={"color": list(PRESETS)})
+    g.add_argument("--hsv", type=float, nargs=6, metavar=("H", "S", "V", "H", "S", "V"),
+                   help="explicit HSV range, low then high, OpenCV scale (H 0-179, S and V 0-255); "
+                   "a low H above the high H wraps through red")
+    _add_fields(p, TrackConfig, ["max_gap", "min_found"])
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+
+def _track_config(a: argparse.Namespace):
+    """The ``TrackConfig`` the tracker options of :func:`_add_tracker_options` ask for."""
+    from study.see.config import TrackConfig
+
+    return TrackConfig(color=a.color, hsv=tuple(a.hsv) if a.hsv else None, max_gap=a.max_gap,
+                       min_found=a.min_found, progress=not a.no_progress)
 
 
 def _add_track(sub: argparse._SubParsersAction) -> None:
@@ -174,27 +199,21 @@ def _add_track(sub: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument("video", type=Path, help="the video file (.mp4, .avi, ... anything OpenCV decodes)")
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--color", default="tennis", help="HSV preset: tennis, orange, red, green, blue (default: %(default)s)")
-    g.add_argument("--hsv", type=float, nargs=6, metavar=("H", "S", "V", "H", "S", "V"),
-                   help="explicit HSV range, low then high, OpenCV scale (H 0-179, S and V 0-255); "
-                   "a low H above the high H wraps through red")
+    _add_tracker_options(p)
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory CSV here (frame, t_s, u_px, v_px, height, status, segment, confidence)")
     p.add_argument("--overlay", type=Path, default=None, help="write a copy of the video with the track drawn (.mp4)")
-    p.add_argument("--max-gap", type=int, default=6, help="longest run of missing frames to interpolate (default: %(default)s)")
-    p.add_argument("--min-found", type=int, default=8, help="fewest frames the object must be found in (default: %(default)s)")
     p.add_argument("--object-size", type=float, default=None, help="the object's diameter in metres (tennis ball 0.067): heights in metres")
     p.add_argument("--metres-per-pixel", type=float, default=None, help="image scale at the object's distance: heights in metres")
     p.add_argument("--ground-v", type=float, default=None, help="image row of the object's centre on the ground (default: its lowest position)")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
-        from study import track
+        from study.see import track
 
-        cfg = track.TrackConfig(color=a.color, hsv=tuple(a.hsv) if a.hsv else None, max_gap=a.max_gap,
-                                min_found=a.min_found, progress=not a.no_progress)
-        traj = track.track_video(a.video, cfg, ground_v=a.ground_v, object_size=a.object_size,
+        for path, what in ((a.out, "trajectory CSV"), (a.overlay, "overlay video")):
+            if path is not None:
+                check_writable(path, what)  # before the tracking, not after it
+        traj = track.track_video(a.video, _track_config(a), ground_v=a.ground_v, object_size=a.object_size,
                                  metres_per_pixel=a.metres_per_pixel)
         if a.out:
             track.write_csv(traj, a.out)
@@ -224,7 +243,8 @@ def _add_evaluate(sub: argparse._SubParsersAction) -> None:
     def run(a: argparse.Namespace) -> int:
         import json
 
-        from study import data, train
+        from study.learn import train
+        from study.simulate import data
 
         tm = train.load(a.model)
         ds = data.load(a.data)
@@ -250,19 +270,18 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("input", type=Path, metavar="VIDEO_OR_CSV", help="a video, or a trajectory CSV from 'study track --out'")
     p.add_argument("--model", type=Path, required=True, help="trained model directory")
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--color", default="tennis", help="HSV preset for a video input (default: %(default)s)")
-    g.add_argument("--hsv", type=float, nargs=6, metavar=("H", "S", "V", "H", "S", "V"), help="explicit HSV range for a video input")
+    _add_tracker_options(p)
     p.add_argument("--object-size", type=float, default=0.067,
                    help="the object's diameter in metres, for the pixel->metre scale (default: %(default)s, a tennis ball)")
     p.add_argument("--metres-per-pixel", type=float, default=None, help="image scale, overrides --object-size")
     p.add_argument("--rest-height", type=float, default=None,
                    help="height of the object's centre at rest, metres (default: half of --object-size)")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
-        from study import CLASSES, track, train
+        from study import CLASSES
         from study.errors import ConfigError, ModelError
+        from study.learn import train
+        from study.see import track
 
         tm = train.load(a.model)
         if tm.dims != "z":
@@ -280,8 +299,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                     "the video with --object-size, so the model sees metres"
                 )
         else:
-            cfg = track.TrackConfig(color=a.color, hsv=tuple(a.hsv) if a.hsv else None, progress=not a.no_progress)
-            traj = track.track_video(a.input, cfg, object_size=a.object_size, metres_per_pixel=a.metres_per_pixel)
+            traj = track.track_video(a.input, _track_config(a), object_size=a.object_size, metres_per_pixel=a.metres_per_pixel)
         rest = a.object_size / 2 if a.rest_height is None else a.rest_height
         x = track.to_model_input(traj, tm.fps, tm.n_frames, rest_height=rest)
         p_cls = tm.predict_proba(x[None])[0]

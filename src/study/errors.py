@@ -43,6 +43,10 @@ class RenderError(StudyError):
     """No OpenGL backend could be loaded for MuJoCo's renderer."""
 
 
+class OutputError(StudyError):
+    """A destination cannot be written: a folder that cannot be created, a read-only place, a path under a file."""
+
+
 class ChapterError(StudyError):
     """A book chapter failed to execute; the message names the chapter and the cell."""
 
@@ -85,3 +89,30 @@ def check_file(path: str | Path, what: str, hint: str) -> Path:
     if p.stat().st_size == 0:
         raise DataError(f"{what} {p}: the file is empty; {hint}")
     return p
+
+
+def output_error(path: str | Path, err: OSError, what: str = "output") -> OutputError:
+    """The :class:`OutputError` for ``err``, raised while writing ``path``: names the path and what to do."""
+    under_file = next((a for a in Path(path).parents if a.is_file()), None)
+    reason = f"{under_file} is a file, not a folder" if under_file else (err.strerror or type(err).__name__)
+    return OutputError(f"{what} {path}: cannot be written ({reason}); choose a folder you can write to")
+
+
+def check_writable(path: str | Path, what: str = "output") -> Path:
+    """Make sure a file can be written at ``path`` before long work starts; :class:`OutputError` if not.
+
+    Creates the missing parent folders (as the write itself would) and a temporary file beside the
+    target, which it removes; an existing file at ``path`` is left alone.
+    """
+    import tempfile
+
+    target = Path(path)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(prefix=f".{target.name}.", suffix=".probe", dir=target.parent):
+            pass
+    except OSError as e:
+        raise output_error(target, e, what) from None
+    if target.is_dir():
+        raise OutputError(f"{what} {target}: is a folder; give a file name")
+    return target

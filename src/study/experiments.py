@@ -2,7 +2,7 @@
 
 Each trained run's result (metrics and training history, not weights) is a JSON file in
 ``data_dir/runs/``, named by :func:`study.cache.key` of the dataset key, the :class:`TrainConfig`,
-whether the test split was scored, the source of ``study.model`` and ``study.train`` and the torch
+whether the test split was scored, the source of ``study.learn.model`` and ``study.learn.train`` and the torch
 version; it is written atomically. Re-building the book therefore never retrains a run whose inputs
 did not change, and editing a preset only trains the runs it adds.
 
@@ -14,7 +14,7 @@ The chapters call, in order:
 3. :func:`length_sweep` -- accuracy against input length for Z and XYZ (the paper's Figure 4).
 4. :func:`ablation` -- peephole LSTM vs the same layer without peepholes vs GRU at the chosen config,
    same seeds.
-5. :func:`baseline_runs` -- the physics baseline of :mod:`study.baseline`, same split.
+5. :func:`baseline_runs` -- the physics baseline of :mod:`study.learn.baseline`, same split.
 
 Every function returns a tidy list of dicts (one row per run), ready for ``pandas.DataFrame``.
 """
@@ -33,12 +33,13 @@ from typing import Any
 
 import numpy as np
 import torch
-from tqdm import tqdm
 
-from study import baseline, cache, native, train
-from study.data import Dataset
+from study import cache, presets
+from study.progress import Progress
 from study.errors import ConfigError, ModelError
-from study.train import TrainConfig
+from study.learn import baseline, native, train
+from study.learn.train import TrainConfig
+from study.simulate.data import Dataset
 
 RUN_FORMAT = "study.run/1"
 
@@ -48,7 +49,7 @@ class Preset:
     """How much of each experiment to run."""
 
     name: str
-    """'smoke' or 'paper'."""
+    """Its name in ``study.presets.NAMES``."""
     length: float
     """Input length for Table 1, the grid and the ablation, seconds."""
     lrs: tuple[float, ...]
@@ -72,13 +73,19 @@ class Preset:
     grid_seed: int = 0
     """The seed of every grid run."""
     cells: tuple[str, ...] = ("peephole", "no-peephole", "gru")
-    """Cells compared in the ablation (``study.model.CELLS``)."""
+    """Cells compared in the ablation (``study.learn.model.CELLS``)."""
     ablation_dims: str = "z"
     """Input dims of the ablation (the grid's, as in the paper's search)."""
     control_lengths: tuple[float, ...] = ()
     """Lengths at which the length sweep is repeated with full back-propagation (no truncation), seconds."""
     control_seeds: tuple[int, ...] = (0,)
     """Seeds of those full-BPTT control runs."""
+    videos_per_class: int = 20
+    """Rendered videos per class in the real-world test (the paper filmed 20 + 20)."""
+    real_clips: int | None = None
+    """Most real clips the real-world test classifies (None: all there are)."""
+    render_shadows: bool = True
+    """Draw shadows in the rendered videos (slower)."""
 
     def base_config(self) -> TrainConfig:
         """The config every run starts from, before the grid values are set."""
@@ -95,12 +102,12 @@ PRESETS: dict[str, Preset] = {
     "smoke": Preset(
         name="smoke", length=1.0, lrs=(3e-3,), truncations=(10, 30), dropouts=(0.2,), batch_sizes=(32,),
         seeds=(0, 1), lengths=(0.5, 1.0, 1.5), length_seeds=(0, 1), max_epochs=3, patience=2,
-        control_lengths=(1.5,),
+        control_lengths=(1.5,), videos_per_class=2, real_clips=2, render_shadows=False,
     ),
-    # The real thing, at the issue's minimum: a 2x2x2x2 grid on Z at 3 s (90 frames); 5 seeds for Z
-    # and XYZ; 8 lengths x 3 seeds x 2 dims; the ablation's 2 other cells x 5 seeds; 4 full-BPTT
-    # controls: 81 trained models (n_models). Measured on the 2-core machine (two runs at a time, one
-    # thread each, 1600 + 400 sequences of 90 frames), all on the compiled loops: 1.0-1.6 s per epoch
+    # The real thing: a 2x2x2x2 grid on Z at 3 s (90 frames); 5 seeds for Z and XYZ; 8 lengths x 3
+    # seeds x 2 dims; the ablation's 2 other cells x 5 seeds; 4 full-BPTT controls: 81 trained models
+    # (n_models). Measured on a 2-core CPU (two runs at a time, one thread each, 1600 + 400 sequences
+    # of 90 frames), all on the compiled loops: 1.0-1.6 s per epoch
     # for the peephole LSTM (and without peepholes), 1.15 for the GRU (nn.GRU itself: 3.4 at batch 32);
     # Z converges in 15-40 epochs, X, Y, Z needs up to
     # 60 at the same settings, hence the 60-epoch cap (a 30-epoch cap left X, Y, Z at ~65 %).
@@ -115,17 +122,15 @@ PRESETS: dict[str, Preset] = {
 
 
 def preset(name: str) -> Preset:
-    """The preset called ``name``; :class:`ConfigError` for an unknown one."""
-    if name not in PRESETS:
-        raise ConfigError(f"preset = {name!r} is unknown; use one of {sorted(PRESETS)}")
-    return PRESETS[name]
+    """The preset called ``name`` (``study.presets.NAMES``); :class:`ConfigError` for an unknown one."""
+    return PRESETS[presets.check(name)]
 
 
 def run_key(dataset: Dataset, cfg: TrainConfig, test: bool) -> str:
     """The cache key of one trained run."""
     return cache.key({
         "format": RUN_FORMAT, "data": dataset.key, "config": dataclasses.asdict(cfg), "test": test,
-        "code": cache.source_hash("model", "gru", "train", "native", *(f.name for f in native.FILES)),
+        "code": cache.source_hash(*train.SOURCES),
         "torch": torch.__version__,
         "backend": native.backend(),  # the compiled and the PyTorch time loop round differently
     })
@@ -137,7 +142,7 @@ def _path(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path, test: bool) 
 
 
 def model_dir(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data") -> Path:
-    """Where :func:`run` keeps the trained model of ``cfg`` (``study.train.load`` reads it): one folder
+    """Where :func:`run` keeps the trained model of ``cfg`` (``study.learn.train.load`` reads it): one folder
     per config and dataset, whether or not the run was scored on the test split."""
     return Path(data_dir) / "models" / run_key(dataset, cfg, test=False)
 
@@ -158,7 +163,7 @@ def run(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data", test:
     """Train ``cfg`` on ``dataset`` (or read the cached result) and return its record.
 
     The record holds the config, the validation accuracy and loss at the kept epoch, the epochs run,
-    the history, the training time and, if ``test``, the test metrics of :func:`study.train.evaluate`.
+    the history, the training time and, if ``test``, the test metrics of :func:`study.learn.train.evaluate`.
     The trained model itself is saved in :func:`model_dir`. A dataset without a key is never cached.
     """
     record = cached(dataset, cfg, data_dir, test)
@@ -207,14 +212,15 @@ def _runs(dataset: Dataset, cfgs: list[TrainConfig], data_dir: str | Path, test:
           workers: int) -> list[dict]:
     """The records of ``cfgs`` in order: cached ones read, the others trained, in ``workers`` processes if > 1.
 
-    Every run is seeded and single-threaded (see :mod:`study.train`), so running them in parallel
+    Every run is seeded and single-threaded (see :mod:`study.learn.train`), so running them in parallel
     processes gives the same records as running them one by one (tested).
     """
     records = [cached(dataset, c, data_dir, test) for c in cfgs]
     todo = [i for i, r in enumerate(records) if r is None]
     # Longest inputs first, so the last runs to finish are short ones and no core idles long at the end.
     todo.sort(key=lambda i: -cfgs[i].n_frames(dataset.fps))
-    with tqdm(total=len(todo), desc=desc, disable=not progress or not todo) as bar:
+    note = f"{len(cfgs) - len(todo)} of {len(cfgs)} cached" if len(todo) < len(cfgs) else ""
+    with Progress(desc, total=len(todo), show=progress and bool(todo), note=note, unit="run") as bar:
         if workers > 1 and len(todo) > 1:
             ctx = multiprocessing.get_context("spawn")  # no fork of a process that holds torch threads
             with ProcessPoolExecutor(min(workers, len(todo)), mp_context=ctx) as pool:

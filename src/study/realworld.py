@@ -2,43 +2,48 @@
 
 Two sources of video:
 
-- :func:`render_set`: throws drawn from the synthesis priors (``study.synth``), rendered with
-  ``study.render`` from a side camera (the launch turned to cross the view, as in the paper's
+- :func:`render_set`: throws drawn from the synthesis priors (``study.simulate.synth``), rendered with
+  ``study.see.render`` from a side camera (the launch turned to cross the view, as in the paper's
   videos), with a known class and ground truth: the paper's 20 + 20 design, heavy objects included.
 - :func:`read_manifest`: a folder of the user's own labelled videos with a ``MANIFEST.csv``
   (columns ``file`` and ``label``; other columns are kept).
 
 :func:`classify` tracks each video, turns its height series into the model's input
-(``study.track.to_model_input``) and records the model's probabilities.
+(``study.see.track.to_model_input``) and records the model's probabilities.
 """
 
 from __future__ import annotations
 
 import csv
-import json
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
-from tqdm import tqdm
 
-from study import CLASSES, cache, render, track
+from study import CLASSES, cache
+from study.simulate import measure
 from study.errors import ConfigError, DataError, StudyError
+from study.progress import Progress
+from study.see import render, track
 
 LABEL_ALIASES = {"light": "light", "bouncy": "light", "ball": "light", "heavy": "heavy", "sliding": "heavy", "cube": "heavy"}
 """Manifest labels understood, mapped to the study's classes."""
 
-SHARED_CLIPS = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "real-video"
-"""Real clips recorded by others (tennis balls only), beside the repository when present; never copied into it."""
+REAL_CLIPS_ENV = "STUDY_REAL_VIDEO"
+"""Environment variable that points :func:`real_clips_dir` at a folder of real clips."""
+REAL_CLIPS_DEFAULT = Path("..") / "shared" / "data" / "real-video"
+"""Where real clips recorded by others (tennis balls only) lie beside the project, relative to the
+working folder (the project root when the book runs); read there, never copied into the project."""
 
 TENNIS_BALL = 0.067
 """Diameter of a tennis ball, metres (ITF: 6.54-6.86 cm)."""
 
 
 class Model(Protocol):
-    """What :func:`classify` needs of a trained model (``study.train.TrainedModel``)."""
+    """What :func:`classify` needs of a trained model (``study.learn.train.TrainedModel``)."""
 
     dims: str
     fps: float
@@ -62,9 +67,19 @@ class Video:
     rest_height: float = TENNIS_BALL / 2
     """Height of the object's centre when it rests on the ground, metres."""
     truth: Path | None = None
-    """Ground-truth CSV of a rendered video (``study.render``), if any."""
+    """Ground-truth CSV of a rendered video (``study.see.render``), if any."""
     info: dict[str, Any] = field(default_factory=dict)
     """Other manifest columns."""
+
+
+def real_clips_dir(path: str | Path | None = None) -> Path:
+    """The folder of real clips: ``path`` if given, else ``$STUDY_REAL_VIDEO``, else :data:`REAL_CLIPS_DEFAULT`.
+
+    The folder may not exist (the clips are optional); :func:`read_manifest` says so if it is read.
+    """
+    if path:
+        return Path(path)
+    return Path(os.environ.get(REAL_CLIPS_ENV) or REAL_CLIPS_DEFAULT)
 
 
 def read_manifest(video_dir: str | Path, color: str = "tennis", object_size: float = TENNIS_BALL) -> list[Video]:
@@ -133,25 +148,26 @@ def render_set(
     horizontal speed capped at ``max_speed`` m/s so the object stays in the picture longer. Videos
     are cached under ``out_dir/<key>/`` by a hash of everything that determines them.
     """
-    from study import synth
+    from study.simulate import synth
 
     cfg = cfg.replace(n_test=n_per_class)
     key = cache.key({"synth": cfg.to_dict(), "seed": seed, "render": rcfg.__dict__ | {"progress": None},
-                     "max_speed": max_speed, "code": cache.source_hash("render", "scene", "synth", "realworld")})
+                     "max_speed": max_speed, "code": cache.source_hash("see.render", "simulate.scene", "simulate.synth", "realworld")})
     folder = Path(out_dir) / f"rendered-{key}"
     params = synth.sample_split(cfg, seed, "test")
     size = 2 * math.sqrt(4 * cfg.shape.size[0] * cfg.shape.size[1] / math.pi) if cfg.shape.kind == "box" else 2 * cfg.shape.size[0]
     videos = []
-    for i in tqdm(range(len(params["label"])), desc="render", disable=not progress):
+    for i in range(len(params["label"])):
         label = CLASSES[int(params["label"][i])]
         name = f"{label}_{i:03d}.mp4"
-        v = Video(folder / name, label, color="orange", object_size=size, rest_height=cfg.shape.rest_height,
-                  truth=(folder / name).with_suffix(".csv"), info={"mass": float(params["mass"][i]),
-                  "restitution": float(params["restitution"][i])})
-        videos.append(v)
-        if v.path.is_file() and v.truth.is_file():
-            continue
-        render.render(*throw(cfg, params, i, max_speed), v.path, rcfg)
+        videos.append(Video(folder / name, label, color="orange", object_size=size, rest_height=cfg.shape.rest_height,
+                            truth=(folder / name).with_suffix(".csv"), info={"mass": float(params["mass"][i]),
+                            "restitution": float(params["restitution"][i])}))
+    todo = [i for i, v in enumerate(videos) if not (v.path.is_file() and v.truth.is_file())]
+    with Progress("render videos", total=len(todo), show=progress, unit="video") as bar:
+        for i in todo:
+            render.render(*throw(cfg, params, i, max_speed), videos[i].path, rcfg)
+            bar.update()
     (folder / "MANIFEST.csv").write_text("file,label\n" + "".join(f"{v.path.name},{v.label}\n" for v in videos))
     return videos
 
@@ -159,11 +175,14 @@ def render_set(
 def track_all(videos: list[Video], progress: bool = True) -> dict[str, track.Trajectory | str]:
     """Track every video (heights in metres from its object size): file name -> trajectory, or the error message."""
     out: dict[str, track.Trajectory | str] = {}
-    for v in tqdm(videos, desc="track", disable=not progress):
-        try:
-            out[v.path.name] = track.track_video(v.path, track.TrackConfig(color=v.color, progress=False), object_size=v.object_size)
-        except StudyError as e:
-            out[v.path.name] = str(e)
+    with Progress("track videos", total=len(videos), show=progress, unit="video") as bar:
+        for v in videos:
+            try:
+                out[v.path.name] = track.track_video(v.path, track.TrackConfig(color=v.color, progress=False),
+                                                     object_size=v.object_size)
+            except StudyError as e:
+                out[v.path.name] = str(e)
+            bar.update()
     return out
 
 
@@ -196,7 +215,7 @@ def classify(
         p = np.asarray(model.predict_proba(x[None]))[0]
         pred = CLASSES[int(np.argmax(p))]
         row |= {"frames": len(traj.t), "found": traj.found_fraction, "filled": int(traj.filled.sum()),
-                "pieces": len(traj.segments()), "bounces": len(track.bounces(piece)), "scale": traj.scale,
+                "pieces": len(traj.segments()), "bounces": measure.bounce_count(piece.height) if piece.units == "m" else None, "scale": traj.scale,
                 "p_light": float(p[0]), "p_heavy": float(p[1]), "predicted": pred, "correct": pred == v.label,
                 "error": ""}
         rows.append(row)
@@ -209,7 +228,8 @@ def trained_z_model(dataset, preset_name: str, data_dir: str | Path = "data", pr
     The trained model is kept in ``experiments.model_dir`` and reloaded when present: the Table 1
     chapter's Z run with the same config and seed has already left it there.
     """
-    from study import experiments, train
+    from study import experiments
+    from study.learn import train
 
     p = experiments.preset(preset_name)
     cfg = experiments.best_config(experiments.grid(dataset, p, data_dir=data_dir, progress=progress), p)
@@ -255,8 +275,3 @@ def tracking_error(videos: list[Video]) -> dict[str, float]:
         total += len(m)
     e = np.concatenate(errs) if errs else np.array([math.nan])
     return {"mean_px": float(np.mean(e)), "p95_px": float(np.percentile(e, 95)), "found": found / max(total, 1)}
-
-
-def save_rows(rows: list[dict[str, Any]], path: str | Path) -> None:
-    """Write classification rows as JSON (atomically)."""
-    cache.write_text_atomic(path, json.dumps(rows, indent=1, default=str) + "\n")

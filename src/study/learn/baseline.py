@@ -6,12 +6,12 @@ What a reviewer would try before an LSTM. From the height series z(t) of each tr
   impact (``h + vz^2 / 2g``, constant in free fall), square-rooted: ``e = sqrt(h_1 / h_0)``;
 - ``ratio``: the mean of ``sqrt(h_{k+1} / h_k)`` over successive apexes (the restitution again, from
   later bounces; equals ``restitution`` when there is one rebound);
-- ``bounces``: the number of rebounds higher than 1 cm;
+- ``bounces``: the number of bounces (``study.simulate.measure.bounces``: rises of 2 cm or more);
 
 heights measured above the lowest centre height seen (the resting height). With ``dims = 'xyz'`` also,
 from the horizontal speed s(t) = |d(x, y)/dt|:
 
-- ``decel``: the mean horizontal deceleration after the first impact, m/s^2;
+- ``decel``: the mean horizontal deceleration after the first ground contact, m/s^2;
 - ``stop``: the fraction of the input window before the object stops moving horizontally (s < 5 cm/s).
 
 A feature that cannot be measured inside the window (no impact yet) is 0. The features are
@@ -26,9 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from study.data import Dataset, Split
 from study.errors import ConfigError, check_range
-from study.train import DIMS, metrics, select_inputs
+from study.learn.config import DIMS, select_inputs
+from study.learn.metrics import metrics
+from study.simulate import measure
+from study.simulate.data import Dataset, Split
 
 G = 9.81
 """Gravity, m/s^2."""
@@ -38,36 +40,30 @@ FEATURES = {"z": ("restitution", "ratio", "bounces"), "xyz": ("restitution", "ra
 
 def _bounce_features(z: np.ndarray, fps: float) -> tuple[float, float, float]:
     """(restitution, ratio, bounces) of one height series ``z`` (T,) metres."""
+    first = measure.first_contact(z)
+    if first is None:
+        return 0.0, 0.0, 0.0
     h = z - z.min()
     vz = np.gradient(z) * fps  # (T,) m/s, central differences
-    dz = np.diff(z)
-    impacts = np.flatnonzero((dz[:-1] < 0) & (dz[1:] >= 0)) + 1  # local minima of z
-    apexes = np.flatnonzero((dz[:-1] > 0) & (dz[1:] <= 0)) + 1  # local maxima of z
-    if len(impacts) == 0:
-        return 0.0, 0.0, 0.0
-    first = impacts[0]
-    pre = slice(0, max(1, first - 1))  # free flight before the first impact (skip the contact frame)
+    pre = slice(0, max(1, first - 1))  # free flight before the first contact (skip the contact frame)
     h0 = float(np.median(h[pre] + vz[pre] ** 2 / (2 * G)))
-    rebounds = h[apexes[apexes > first]]
-    rebounds = rebounds[rebounds > 0.01]
+    b = measure.bounces(z)
+    rebounds = h[b.apexes]
     if len(rebounds) == 0 or h0 <= 0:
-        return 0.0, 0.0, 0.0
+        return 0.0, 0.0, float(len(b.impacts))
     heights = np.concatenate([[h0], rebounds])
     ratios = np.sqrt(heights[1:] / heights[:-1])
-    return float(ratios[0]), float(ratios.mean()), float(len(rebounds))
+    return float(ratios[0]), float(ratios.mean()), float(len(b.impacts))
 
 
 def _slide_features(xy: np.ndarray, z: np.ndarray, fps: float) -> tuple[float, float]:
     """(decel, stop) of one trajectory: horizontal ``xy`` (T, 2) and height ``z`` (T,), metres."""
     s = np.linalg.norm(np.diff(xy, axis=0), axis=1) * fps  # (T-1,) horizontal speed, m/s
-    dz = np.diff(z)
-    impacts = np.flatnonzero((dz[:-1] < 0) & (dz[1:] >= 0)) + 1
-    first = int(impacts[0]) if len(impacts) else 0
-    after = s[first:]
+    after = s[measure.first_contact(z) or 0 :]
     if len(after) < 2:
         return 0.0, 1.0
     decel = (after[0] - after[-1]) / ((len(after) - 1) / fps)
-    moving = np.flatnonzero(s > 0.05)
+    moving = np.flatnonzero(s > measure.REST_SPEED)
     stop = (moving[-1] + 1) / len(s) if len(moving) else 0.0
     return float(decel), float(stop)
 
@@ -146,5 +142,5 @@ def fit(dataset: Dataset, dims: str, length: float) -> PhysicsBaseline:
 
 
 def evaluate(model: PhysicsBaseline, split: Split) -> dict:
-    """Accuracy, per-class accuracy and confusion matrix on ``split`` (see :func:`study.train.metrics`)."""
+    """Accuracy, per-class accuracy and confusion matrix on ``split`` (see :func:`study.learn.metrics.metrics`)."""
     return metrics(split.y, model.predict_proba(split.x).argmax(axis=1))

@@ -77,7 +77,7 @@ def scene_xml(
         shape: the object's geometry.
         mass: kg; the inertia is that of a uniform solid of this shape.
         damping: contact damping b of the direct ``solref`` format, 1/s; sets the restitution
-            (see ``study.physics.damping_for_restitution``).
+            (see ``study.simulate.contact.damping_for_restitution``).
         stiffness: contact stiffness k of the direct ``solref`` format, 1/s^2.
         friction: sliding friction coefficient (dimensionless), used alone thanks to ``priority``.
         timestep: simulation step, seconds.

@@ -12,21 +12,29 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from study import measure
-from study.contact import damping_for_restitution, drop_test
-from study.synth import GRAVITY, SynthConfig, build_model, simulate, staggered_qvel
+from study.simulate import measure
+from study.simulate.contact import damping_for_restitution, drop_test
+from study.simulate.synth import (
+    GRAVITY,
+    SynthConfig,
+    build_model,
+    simulate,
+    staggered_qvel,
+)
 
 
-def free_flight_error(cfg: SynthConfig, qpos0: np.ndarray, qvel0: np.ndarray, duration: float = 1.0) -> float:
+def free_flight_error(cfg: SynthConfig, qpos0: np.ndarray, qvel0: np.ndarray, duration: float = 1.0,
+                      staggered: bool = True) -> float:
     """Largest distance, metres, between simulated and analytic free-flight centre positions.
 
     Air off and the object launched high enough that it cannot reach the ground in ``duration``
-    seconds (asserted); compares every step with ``p0 + v0 t - g t^2 / 2``.
+    seconds (asserted); compares every step with ``p0 + v0 t - g t^2 / 2``. ``staggered=False`` gives
+    MuJoCo the launch velocity as it is, instead of :func:`staggered_qvel` (the naive start).
     """
     m = build_model(cfg.replace(air=False), mass=1.0, damping=100.0, friction=0.5)
     d = mujoco.MjData(m)
     d.qpos[:] = qpos0
-    d.qvel[:] = staggered_qvel(qvel0, m.opt.timestep)
+    d.qvel[:] = staggered_qvel(qvel0, m.opt.timestep) if staggered else qvel0
     worst = 0.0
     for k in range(1, int(round(duration / m.opt.timestep)) + 1):
         mujoco.mj_step(m, d)
@@ -107,7 +115,7 @@ def convergence(cfg: SynthConfig, restitutions: np.ndarray) -> dict[str, np.ndar
 
     Returns ``{"set": e, "dt": measured at dt, "dt/2": measured at dt/2}``, each (k,).
     """
-    from study.contact import measured_restitution
+    from study.simulate.contact import measured_restitution
 
     dt = cfg.timestep
     b = damping_for_restitution(np.asarray(restitutions), cfg.shape, stiffness=cfg.stiffness, timestep=dt)
@@ -123,7 +131,7 @@ def sleep_effect(
     Returns per trajectory (each (n,)): ``max_diff``, the largest distance between the two centre
     positions over the record, metres; ``first_diff``, the first frame time at which they differ at
     all, seconds (nan if never); ``time_to_rest`` of the awake trajectory
-    (``study.measure.features``), seconds; ``last_speed_asleep``, ``last_speed_awake``, the largest
+    (``study.simulate.measure.features``), seconds; ``last_speed_asleep``, ``last_speed_awake``, the largest
     frame-to-frame speed in the last second of each record, m/s. And ``seconds_asleep``,
     ``seconds_awake``: wall time of each simulation on ``threads`` threads.
     """

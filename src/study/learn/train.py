@@ -12,8 +12,8 @@ Determinism: :func:`fit` seeds everything from ``cfg.seed`` (the split permutati
 weights, batch order and dropout masks with torch, inside a forked RNG so the caller's RNG is left
 alone), turns on ``torch.use_deterministic_algorithms`` and runs on ``THREADS`` CPU threads, so the
 same config, seed and data give bitwise-identical weights on the same machine. One thread, because
-floating-point reductions may be split differently across thread counts, and because parallel
-experiments are better run as separate processes on this 2-core machine.
+floating-point reductions may be split differently across thread counts, and because independent runs
+parallelise better as separate processes (``study.experiments`` runs them so).
 """
 
 from __future__ import annotations
@@ -36,95 +36,27 @@ import torch
 import torch.nn.functional as F
 from tqdm import tqdm
 
-from study import CLASSES, native
-from study.data import Dataset, Split
-from study.errors import ConfigError, ModelError, TrajectoryError, check_range
-from study.model import CELLS, Classifier
+from study import CLASSES
+from study.errors import ConfigError, ModelError, TrajectoryError, output_error
+from study.learn import native
+from study.learn.config import (  # re-exported: train.TrainConfig
+    DIMS,
+    TrainConfig,
+    select_inputs,
+)
+from study.learn.metrics import metrics
+from study.learn.model import Classifier
+from study.simulate.data import Dataset, Split
 
-DIMS: dict[str, tuple[int, ...]] = {"z": (2,), "xyz": (0, 1, 2)}
-"""Input dimensions by name: columns of the (x, y, z) trajectory the model sees."""
-
+SOURCES = ("learn.config", "learn.model", "learn.gru", "learn.native", "learn.train",
+           *(f.relative_to(native.PACKAGE).as_posix() for f in native.FILES))
+"""The code that determines a trained model (``study.cache.source_hash`` names): part of every run's cache key."""
 THREADS = 1
 """CPU threads used by :func:`fit` (see the module docstring)."""
 
 FORMAT = "study.model/1"
 FILES = ("weights.pt", "config.json", "normalisation.json", "history.json", "meta.json")
 """What a saved model directory holds."""
-
-
-@dataclass(frozen=True)
-class TrainConfig:
-    """Everything that determines a trained model, besides the data."""
-
-    dims: str = "xyz"
-    """Input dimensions: 'xyz' (all three coordinates) or 'z' (height only)."""
-    length: float = 3.0
-    """Input length T in seconds: the model sees the first ``length`` seconds of each trajectory."""
-    hidden: int = 64
-    """Units per recurrent layer (paper: 64)."""
-    layers: int = 2
-    """Recurrent layers (paper: 2)."""
-    dropout: float = 0.2
-    """Probability of dropping a unit of the last hidden state (paper's 'rate 0.8' read as keep-probability)."""
-    lr: float = 3e-3
-    """Adam learning rate."""
-    batch_size: int = 32
-    """Trajectories per gradient step."""
-    truncation: int = 30
-    """Truncated-BPTT length in frames: the loss back-propagates through at most this many last frames."""
-    max_epochs: int = 60
-    """Upper bound on passes over the training split."""
-    patience: int = 10
-    """Stop after this many epochs without a lower validation loss; the best epoch's weights are kept."""
-    val_fraction: float = 0.2
-    """Share of the training split held out for early stopping (and for the grid search)."""
-    seed: int = 0
-    """Seeds the validation split, the initial weights, the batch order and the dropout masks."""
-    cell: str = "peephole"
-    """Recurrent cell: 'peephole' (the paper's), 'no-peephole' (the same layer, peepholes fixed at 0), 'lstm'
-    (nn.LSTM) or 'gru' (nn.GRU)."""
-
-    def check(self) -> None:
-        """Raise :class:`ConfigError` naming the first field that is out of range."""
-        if self.dims not in DIMS:
-            raise ConfigError(f"TrainConfig.dims = {self.dims!r} is unknown; use 'xyz' or 'z'")
-        if self.cell not in CELLS:
-            raise ConfigError(f"TrainConfig.cell = {self.cell!r} is unknown; use one of {CELLS}")
-        check_range("TrainConfig.length (seconds)", self.length, 0, lo_open=True)
-        for name in ("hidden", "layers", "batch_size", "truncation", "max_epochs", "patience"):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-                raise ConfigError(f"TrainConfig.{name} = {value!r}; it must be a whole number >= 1")
-        check_range("TrainConfig.dropout", self.dropout, 0, 1, hi_open=True)
-        check_range("TrainConfig.lr", self.lr, 0, lo_open=True)
-        check_range("TrainConfig.val_fraction", self.val_fraction, 0, 1, lo_open=True, hi_open=True)
-
-    def n_frames(self, fps: float) -> int:
-        """T in frames at ``fps``: ``round(length * fps)``, at least 1."""
-        return max(1, round(self.length * fps))
-
-
-def select_inputs(x: np.ndarray, dims: str, n_frames: int, what: str = "trajectories") -> np.ndarray:
-    """First ``n_frames`` frames and the ``dims`` columns of ``x`` (n, T, 3) -> (n, n_frames, D) float32.
-
-    Raises :class:`TrajectoryError` for a wrong shape, too few frames, or NaN/infinite values.
-    """
-    x = np.asarray(x)
-    if x.ndim != 3 or x.shape[2] != 3:
-        raise TrajectoryError(f"{what}: shape {x.shape}; expected (n, T, 3) world x, y, z in metres")
-    if x.shape[1] < n_frames:
-        raise TrajectoryError(
-            f"{what}: {x.shape[1]} frames, but the model needs {n_frames}; use a shorter "
-            "length (seconds) or longer trajectories (the paper zero-pads short ones)"
-        )
-    out = np.ascontiguousarray(x[:, :n_frames, DIMS[dims]], dtype=np.float32)
-    bad = ~np.isfinite(out).all(axis=(1, 2))
-    if bad.any():
-        raise TrajectoryError(
-            f"{what}: {int(bad.sum())} trajectories hold NaN or infinite values "
-            f"(first: index {int(np.argmax(bad))}); fix or drop them"
-        )
-    return out
 
 
 @dataclass
@@ -170,10 +102,16 @@ class TrainedModel:
         return torch.cat(out).double().numpy() if out else np.zeros((0, 2))
 
     def save(self, out_dir: str | Path) -> Path:
-        """Write the model directory atomically (a temporary directory renamed into place)."""
+        """Write the model directory atomically (a temporary directory renamed into place).
+
+        Raises :class:`study.errors.OutputError` if ``out_dir`` cannot be written.
+        """
         out = Path(out_dir)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+            tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+        except OSError as e:
+            raise output_error(out, e, "model directory") from None
         try:
             torch.save(self.net.state_dict(), tmp / "weights.pt")
             texts = {
@@ -334,21 +272,6 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedMod
         net.load_state_dict(best_state)
         net.eval()
     return TrainedModel(net=net, config=cfg, fps=dataset.fps, data_key=dataset.key, history=history, best_epoch=best_epoch)
-
-
-def metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, Any]:
-    """Accuracy, per-class accuracy and the confusion matrix (rows true class, columns predicted)."""
-    y_true, y_pred = np.asarray(y_true), np.asarray(y_pred)
-    cm = np.zeros((len(CLASSES), len(CLASSES)), dtype=np.int64)
-    np.add.at(cm, (y_true, y_pred), 1)
-    per_class = {c: (float(cm[k, k] / cm[k].sum()) if cm[k].sum() else math.nan) for k, c in enumerate(CLASSES)}
-    return {
-        "n": int(len(y_true)),
-        "accuracy": float((y_true == y_pred).mean()) if len(y_true) else math.nan,
-        "per_class_accuracy": per_class,
-        "confusion": cm.tolist(),
-        "classes": list(CLASSES),
-    }
 
 
 def evaluate(tm: TrainedModel, split: Split) -> dict[str, Any]:

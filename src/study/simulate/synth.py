@@ -25,12 +25,16 @@ from typing import Any
 import mujoco
 import numpy as np
 from mujoco import rollout
-from tqdm import tqdm
 
-from study import CLASSES, __version__, cache, data
-from study.contact import damping_for_restitution, penetration_bound, restitution_range
+from study import CLASSES, __version__, cache, presets
 from study.errors import ConfigError, check_range
-from study.scene import Shape, compile_scene
+from study.progress import Progress
+from study.simulate import data
+from study.simulate.contact import (
+    damping_for_restitution,
+    restitution_range,
+)
+from study.simulate.scene import Shape, compile_scene
 
 GRAVITY = 9.81
 """m/s^2, MuJoCo's default |gravity|."""
@@ -130,12 +134,9 @@ class SynthConfig:
 
     @classmethod
     def preset(cls, name: str) -> SynthConfig:
-        """``'paper'``: the paper's size (1000 train + 1000 test per class, 10 s). ``'smoke'``: tiny."""
-        if name == "paper":
-            return cls()
-        if name == "smoke":
-            return cls(n_train=8, n_test=8, duration=3.0)
-        raise ConfigError(f"unknown preset {name!r}; allowed: 'smoke', 'paper'")
+        """The config of a preset (``study.presets``): ``'paper'``, the paper's size (1000 train + 1000
+        test per class, 10 s); ``'smoke'``, a few short throws."""
+        return {"smoke": cls(n_train=8, n_test=8, duration=3.0), "paper": cls()}[presets.check(name)]
 
     def replace(self, **changes: Any) -> SynthConfig:
         """A copy with ``changes`` applied, validated."""
@@ -375,8 +376,8 @@ def simulate(
     threads = (os.cpu_count() or 1) if threads is None else threads
     nstep = (cfg.n_frames - 1) * cfg.steps_per_frame
     out = np.empty((n, cfg.n_frames, 3))
-    with rollout.Rollout(nthread=threads if threads > 1 else 0) as pool, tqdm(
-        total=n, desc=desc, unit="traj", disable=not progress, leave=False
+    with rollout.Rollout(nthread=threads if threads > 1 else 0) as pool, Progress(
+        desc, total=n, show=progress, unit="traj"
     ) as bar:
         for idx in _chunks(n, chunk):
             models = _models(cfg, params, idx)
@@ -417,7 +418,7 @@ def provenance() -> dict[str, str]:
     """Versions that can change the simulated numbers."""
     return {
         "study": __version__,
-        "code": cache.source_hash("synth", "contact", "scene"),
+        "code": cache.source_hash("simulate.synth", "simulate.contact", "simulate.scene"),
         "mujoco": mujoco.__version__,
         "numpy": np.__version__,
     }

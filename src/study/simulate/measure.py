@@ -7,33 +7,68 @@ separates the classes.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 MIN_RISE = 0.02
-"""A bounce is a local maximum of height at least this far (metres) above the preceding minimum."""
+"""Metres. A bounce is a fall to a low point followed by a rise of at least this much (see :func:`bounces`)."""
 REST_SPEED = 0.05
 """Speed (m/s) below which the object counts as at rest, if it stays below for the rest of the record."""
 
 
-def bounce_count(z: np.ndarray, min_rise: float = MIN_RISE) -> np.ndarray | int:
-    """Number of bounces in each height series.
+@dataclass(frozen=True)
+class Bounces:
+    """The bounces of one height series, as frame indices."""
 
-    ``z``: (T,) or (n, T) metres. A bounce is an apex (local maximum) at least ``min_rise`` above the
-    lowest valley (local minimum) since the previous apex; the launch is no valley, so a throw that
-    starts by rising is not a bounce. Returns an int for (T,), (n,) int64 for (n, T).
+    impacts: np.ndarray
+    """(k,) int: the lowest point of each fall that is followed by a rise of at least ``min_rise``."""
+    apexes: np.ndarray
+    """(j,) int, j <= k: the highest point of each of those rises, once the object has fallen
+    ``min_rise`` from it again (a rise still going on when the series ends has no apex yet)."""
+
+
+def bounces(z: np.ndarray, min_rise: float = MIN_RISE) -> Bounces:
+    """The study's one bounce detector, for simulated and tracked heights alike.
+
+    ``z``: (T,) heights, metres (or any unit, with ``min_rise`` in the same). Hysteresis: a *fall* is
+    a drop of at least ``min_rise`` below the highest point since the last low; a *bounce* is a rise
+    of at least ``min_rise`` above the lowest point of a fall (its *impact*). Wiggles smaller than
+    ``min_rise`` -- a box rocking on an edge, a tracker's jitter -- are neither. The launch is no
+    impact, so a throw that starts by rising is not a bounce.
     """
     z = np.asarray(z, dtype=float)
-    single = z.ndim == 1
-    out = np.zeros(len(np.atleast_2d(z)), dtype=np.int64)
-    for i, s in enumerate(np.atleast_2d(z)):
-        low = np.inf
-        for t in range(1, len(s) - 1):
-            if s[t] < s[t - 1] and s[t] <= s[t + 1]:
-                low = min(low, s[t])
-            elif s[t] >= s[t - 1] and s[t] > s[t + 1] and s[t] - low >= min_rise:
-                out[i] += 1
-                low = np.inf
-    return int(out[0]) if single else out
+    impacts: list[int] = []
+    apexes: list[int] = []
+    hi, lo, falling = 0, 0, False
+    for t in range(1, len(z)):
+        if not falling:
+            if z[t] > z[hi]:
+                hi = t
+            elif z[hi] - z[t] >= min_rise:
+                if impacts:
+                    apexes.append(hi)  # the top of a rebound (the launch's top is no apex)
+                falling, lo = True, t
+        elif z[t] < z[lo]:
+            lo = t
+        elif z[t] - z[lo] >= min_rise:
+            impacts.append(lo)
+            falling, hi = False, t
+    return Bounces(np.asarray(impacts, dtype=np.int64), np.asarray(apexes, dtype=np.int64))
+
+
+def bounce_count(z: np.ndarray, min_rise: float = MIN_RISE) -> np.ndarray | int:
+    """Number of bounces (:func:`bounces`) in each height series: ``z`` (T,) -> int, (n, T) -> (n,) int64."""
+    z = np.asarray(z, dtype=float)
+    counts = np.array([len(bounces(s, min_rise).impacts) for s in np.atleast_2d(z)], dtype=np.int64)
+    return int(counts[0]) if z.ndim == 1 else counts
+
+
+def first_contact(z: np.ndarray) -> int | None:
+    """Frame at which the first fall ends (the first local minimum of ``z`` (T,)), or None if z never turns."""
+    dz = np.diff(np.asarray(z, dtype=float))
+    lows = np.flatnonzero((dz[:-1] < 0) & (dz[1:] >= 0)) + 1
+    return int(lows[0]) if len(lows) else None
 
 
 def speeds(x: np.ndarray, fps: float) -> np.ndarray:
@@ -80,7 +115,7 @@ def best_threshold_rule(f_train: np.ndarray, y_train: np.ndarray, f_test: np.nda
 
 
 FEATURES = {
-    "bounces": "number of bounces (rises of 2 cm or more)",
+    "bounces": "number of bounces (rises of 2 cm or more after a fall)",
     "time_to_rest": "time until the object stops, s",
     "distance": "distance travelled in the ground plane, m",
     "max_height_after_1s": "highest point after the first second, m",

@@ -9,7 +9,7 @@ matrix product to PyTorch's own BLAS (``sgemm_``/``dgemm_`` of ``libtorch_cpu``)
 The library is compiled with the system C++ compiler (``$CXX``, else ``g++``; about a second, no
 PyTorch headers) into a folder keyed by the source, the compiler, the flags and this CPU, written
 atomically. Without a compiler, or with ``STUDY_NATIVE=0``, :func:`load` returns ``None`` and
-``study.model`` runs the same loop as PyTorch operations (slower; last-bit rounding differs, so the
+``study.learn.model`` runs the same loop as PyTorch operations (slower; last-bit rounding differs, so the
 backend is part of every training run's cache key: :func:`backend`).
 """
 
@@ -28,9 +28,12 @@ from collections.abc import Iterator
 from functools import lru_cache
 from pathlib import Path
 
+import platformdirs
 import torch
 
 _HERE = Path(__file__).resolve().parent
+PACKAGE = _HERE.parent
+"""The ``study`` package folder."""
 SOURCES = (_HERE / "peephole.cpp", _HERE / "gru.cpp")
 """Compiled together into one library; both include ``rnn_math.h``."""
 HEADER = _HERE / "rnn_math.h"
@@ -45,19 +48,33 @@ Newton step (about 2x faster forward loop on x86-64; relative error ~1e-7, as th
 pair interleaves independent units' instructions. Outputs stay within the tests' 1e-5 of float64."""
 
 
+SIGNATURES: dict[str, int] = {
+    "peephole_forward_f32": 9, "peephole_forward_f64": 9, "peephole_backward_f32": 13, "peephole_backward_f64": 13,
+    "gru_forward_f32": 7, "gru_forward_f64": 7, "gru_backward_f32": 9, "gru_backward_f64": 9,
+}
+"""Each entry point of the library and how many pointers it takes after its three ints (T, B, H), the
+BLAS routine last; all return nothing. ctypes checks every call against these (see :class:`Native`)."""
+
+
 class Native:
-    """The loaded library: its entry points (per dtype) and the BLAS routine pointers they call."""
+    """The loaded library: its entry points (per dtype) and the BLAS routine pointers they call.
+
+    Every entry point has its ``argtypes`` and ``restype`` declared from :data:`SIGNATURES`, so a call
+    with the wrong number or kind of arguments raises ``TypeError`` or ``ctypes.ArgumentError``
+    instead of corrupting memory.
+    """
 
     def __init__(self, lib: ctypes.CDLL, sgemm: int, dgemm: int) -> None:
         self.lib = lib  # held so the library stays loaded
+        for name, n_pointers in SIGNATURES.items():
+            fn = getattr(lib, name)
+            fn.argtypes = [ctypes.c_int] * 3 + [ctypes.c_void_p] * n_pointers
+            fn.restype = None
         self.blas = {torch.float32: ctypes.c_void_p(sgemm), torch.float64: ctypes.c_void_p(dgemm)}
         self.forward = {torch.float32: lib.peephole_forward_f32, torch.float64: lib.peephole_forward_f64}
         self.backward = {torch.float32: lib.peephole_backward_f32, torch.float64: lib.peephole_backward_f64}
         self.gru_forward = {torch.float32: lib.gru_forward_f32, torch.float64: lib.gru_forward_f64}
         self.gru_backward = {torch.float32: lib.gru_backward_f32, torch.float64: lib.gru_backward_f64}
-        for fn in (*self.forward.values(), *self.backward.values(), *self.gru_forward.values(),
-                   *self.gru_backward.values()):
-            fn.restype = None
 
 
 def ptr(t: torch.Tensor) -> ctypes.c_void_p:
@@ -72,9 +89,10 @@ def own(grad: torch.Tensor | None, like: torch.Tensor, shape: tuple[int, ...]) -
 
 
 def cache_dir() -> Path:
-    """Where compiled libraries live: ``$STUDY_NATIVE_DIR``, else ``~/.cache/study/native``."""
+    """Where compiled libraries live: ``$STUDY_NATIVE_DIR``, else the platform's user cache folder
+    (``$XDG_CACHE_HOME/study/native``, by default ``~/.cache/study/native``, on Linux)."""
     env = os.environ.get("STUDY_NATIVE_DIR")
-    return Path(env) if env else Path.home() / ".cache" / "study" / "native"
+    return Path(env) if env else platformdirs.user_cache_path("study") / "native"
 
 
 def _cpu() -> str:
@@ -155,7 +173,7 @@ _disabled = False
 
 @contextlib.contextmanager
 def disabled() -> Iterator[None]:
-    """Within the block ``study.model`` runs the PyTorch loop even where the compiled one exists
+    """Within the block ``study.learn.model`` runs the PyTorch loop even where the compiled one exists
     (for benchmarks that compare the two in one run)."""
     global _disabled
     before, _disabled = _disabled, True

@@ -24,7 +24,7 @@ import numpy as np
 from mujoco import rollout
 
 from study.errors import ConfigError
-from study.scene import Shape, compile_scene
+from study.simulate.scene import Shape, compile_scene
 
 CALIBRATION_DROP = 1.0
 """Release height of the lowest point above the ground in calibration drops, metres."""

@@ -28,14 +28,10 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from study import native
-from study.gru import GRU
 from study.errors import ConfigError
-
-CELLS = ("peephole", "no-peephole", "lstm", "gru")
-"""Recurrent cells the classifier offers: the paper's peephole LSTM; the same layer with its peepholes fixed
-at zero (an LSTM without peepholes on the same compiled loop: the ablation's control); ``nn.LSTM``;
-``nn.GRU`` (as :class:`study.gru.GRU`, on a compiled loop too)."""
+from study.learn import native
+from study.learn.config import CELLS
+from study.learn.gru import GRU
 
 # A layer's state is (h, c) for the LSTMs, h alone for the GRU; the classifier's state is whatever its
 # recurrent core takes: a list of per-layer (h, c) for the peephole stack, nn.LSTM's or nn.GRU's own.
@@ -216,7 +212,7 @@ class PeepholeFunction(torch.autograd.Function):
     """The peephole LSTM layer with a hand-written backward pass (what makes it as fast as ``nn.LSTM``).
 
     Forward runs the time loop without building an autograd graph; backward walks the steps once in
-    reverse. On CPU both loops are the compiled ones of ``peephole.cpp`` (:mod:`study.native`: one BLAS
+    reverse. On CPU both loops are the compiled ones of ``peephole.cpp`` (:mod:`study.learn.native`: one BLAS
     call and one fused elementwise pass per step), else :func:`_recurrence` and :func:`_backward_loop`
     in PyTorch operations. The weight gradients are then single matrix products over all time steps.
     Both paths are checked against :func:`peephole_reference` and ``torch.autograd.gradcheck`` in the tests.

@@ -2,9 +2,9 @@
 
 :class:`GRU` *is* an ``nn.GRU`` (same parameters, initialisation, state dict and state shape), so a
 model saved with one loads into the other. Its forward runs each layer through :class:`GRUFunction`:
-one BLAS call and one fused elementwise pass per time step in ``gru.cpp`` (:mod:`study.native`), a
+one BLAS call and one fused elementwise pass per time step in ``gru.cpp`` (:mod:`study.learn.native`), a
 hand-written backward, and the weight gradients as single matrix products over all steps. Where the
-compiled loop cannot run (CUDA, other dtypes, ``study.native`` disabled or unavailable, inter-layer
+compiled loop cannot run (CUDA, other dtypes, ``study.learn.native`` disabled or unavailable, inter-layer
 dropout, unbatched input) it is plain ``nn.GRU``.
 
 Shapes: B batch, T frames, D input dims, H hidden units, L layers; batch-first like the classifier.
@@ -16,7 +16,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from study import native
+from study.learn import native
 
 
 class GRUFunction(torch.autograd.Function):

@@ -1,6 +1,6 @@
 """Frame-by-frame classification of one trajectory in NumPy: what a car would run per camera frame.
 
-:meth:`study.model.Classifier.step` streams in PyTorch, but a PyTorch call costs several
+:meth:`study.learn.model.Classifier.step` streams in PyTorch, but a PyTorch call costs several
 microseconds however small the tensor, and one frame of the paper's network is some forty of
 them. :class:`Streamer` copies the weights of a trained peephole (or plain) LSTM classifier into
 preallocated NumPy buffers and updates one trajectory's state with about twenty small NumPy calls
@@ -80,7 +80,7 @@ class _Layer:
 class Streamer:
     """Classify one trajectory frame by frame: ``push(xyz_or_z)`` -> probabilities (2,) of (light, heavy).
 
-    Built from a :class:`study.model.Classifier` with a ``peephole`` or ``lstm`` core (eval-mode
+    Built from a :class:`study.learn.model.Classifier` with a ``peephole`` or ``lstm`` core (eval-mode
     behaviour: no dropout). Inputs are raw metres, divided by the classifier's stored training
     standard deviation, as in the network. ``reset()`` starts a new trajectory.
     """

@@ -1,6 +1,6 @@
 """Render a simulated throw to a video with a known answer, and write its ground truth beside it.
 
-:func:`simulate` steps a compiled scene (``study.scene.compile_scene``) from an initial state with
+:func:`simulate` steps a compiled scene (``study.simulate.scene.compile_scene``) from an initial state with
 ``mujoco.mj_step``; :func:`render` draws the stored states through the scene's fixed camera with
 MuJoCo's offscreen renderer, adds optional motion blur (the average of sub-frame renders over the
 shutter time), sensor noise and JPEG-like degradation (a resting, asleep object's pose repeats bit
@@ -22,11 +22,11 @@ import mujoco  # MUJOCO_GL's default (egl) is set in study/__init__.py, before a
 import numpy as np
 from tqdm import tqdm
 
-from study import synth
 from study.cache import write_text_atomic
 from study.errors import ConfigError, RenderError, check_range
-from study.scene import Shape
-from study.video import atomic_writer
+from study.see.video import atomic_writer
+from study.simulate import synth
+from study.simulate.scene import Shape
 
 CLASS_PARAMS: dict[str, dict[str, float]] = {
     "light": {"mass": 0.2, "damping": 100.0, "friction": 0.5},
@@ -113,9 +113,9 @@ def class_model(label: str, shape: Shape = Shape(), timestep: float = TIMESTEP, 
                 sleep_tolerance: float = SLEEP_TOLERANCE) -> mujoco.MjModel:
     """The scene with one object of class ``label`` ('light' or 'heavy') using :data:`CLASS_PARAMS`.
 
-    ``sleep_tolerance``: m/s, as ``study.synth.SynthConfig.sleep_tolerance`` (0: never asleep).
+    ``sleep_tolerance``: m/s, as ``study.simulate.synth.SynthConfig.sleep_tolerance`` (0: never asleep).
     """
-    from study.scene import compile_scene
+    from study.simulate.scene import compile_scene
 
     if label not in CLASS_PARAMS:
         raise ConfigError(f"label = {label!r} is unknown; allowed: {', '.join(CLASS_PARAMS)}")
@@ -293,11 +293,11 @@ def read_truth(path: str | Path) -> dict[str, np.ndarray]:
 def synth_model(cfg, params: dict[str, np.ndarray], i: int) -> tuple[mujoco.MjModel, np.ndarray, np.ndarray]:
     """The compiled scene and MuJoCo initial state (qpos, qvel) of trajectory ``i`` of a synth split.
 
-    ``cfg`` is a ``study.synth.SynthConfig``; ``params`` a split's ``params`` dict (mass, damping,
+    ``cfg`` is a ``study.simulate.synth.SynthConfig``; ``params`` a split's ``params`` dict (mass, damping,
     friction, qpos0, qvel0). The velocity is staggered exactly as synthesis does, so the rendered
     motion is the dataset's trajectory.
     """
-    from study import synth
+    from study.simulate import synth
 
     model = synth.build_model(cfg, float(params["mass"][i]), float(params["damping"][i]), float(params["friction"][i]))
     return model, np.asarray(params["qpos0"][i], float), synth.staggered_qvel(params["qvel0"][i], cfg.timestep)

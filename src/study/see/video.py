@@ -16,8 +16,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from study.errors import VideoError
-
+from study.errors import VideoError, check_writable
 
 TRUNCATED_FRACTION = 0.9
 """A video that decodes fewer than this fraction of the frames its container lists is truncated."""
@@ -131,10 +130,9 @@ def atomic_writer(path: str | Path, fps: float, size: tuple[int, int], fourcc: s
     """Yield a ``cv2.VideoWriter`` (``size`` = (width, height)) writing to a temporary file renamed onto ``path``.
 
     The temporary file keeps ``path``'s extension so OpenCV picks the same container. On an
-    exception it is removed and ``path`` is left as it was.
+    exception it is removed and ``path`` is left as it was. :class:`OutputError` if ``path`` cannot be written.
     """
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
+    target = check_writable(path, "video")
     tmp = target.with_name(f".{target.stem}.{os.getpid()}.tmp{target.suffix}")
     writer = cv2.VideoWriter(str(tmp), cv2.VideoWriter_fourcc(*fourcc), float(fps), (int(size[0]), int(size[1])))
     if not writer.isOpened():

@@ -1,0 +1,97 @@
+"""What a training run is made of, without torch: the input dimensions, the recurrent cells, the training
+config, and the selection of a model's inputs from trajectories.
+
+Importing this costs no torch, so the command line can build its options and help from these
+definitions, and the NumPy baseline can share them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from study.errors import ConfigError, TrajectoryError, check_range
+
+DIMS: dict[str, tuple[int, ...]] = {"z": (2,), "xyz": (0, 1, 2)}
+"""Input dimensions by name: columns of the (x, y, z) trajectory the model sees."""
+
+CELLS = ("peephole", "no-peephole", "lstm", "gru")
+"""Recurrent cells the classifier offers: the paper's peephole LSTM; the same layer with its peepholes fixed
+at zero (an LSTM without peepholes on the same compiled loop: the ablation's control); ``nn.LSTM``;
+``nn.GRU`` (as :class:`study.learn.gru.GRU`, on a compiled loop too)."""
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything that determines a trained model, besides the data."""
+
+    dims: str = "xyz"
+    """Input dimensions: 'xyz' (all three coordinates) or 'z' (height only)."""
+    length: float = 3.0
+    """Input length T in seconds: the model sees the first ``length`` seconds of each trajectory."""
+    hidden: int = 64
+    """Units per recurrent layer (paper: 64)."""
+    layers: int = 2
+    """Recurrent layers (paper: 2)."""
+    dropout: float = 0.2
+    """Probability of dropping a unit of the last hidden state (paper's 'rate 0.8' read as keep-probability)."""
+    lr: float = 3e-3
+    """Adam learning rate."""
+    batch_size: int = 32
+    """Trajectories per gradient step."""
+    truncation: int = 30
+    """Truncated-BPTT length in frames: the loss back-propagates through at most this many last frames."""
+    max_epochs: int = 60
+    """Upper bound on passes over the training split."""
+    patience: int = 10
+    """Stop after this many epochs without a lower validation loss; the best epoch's weights are kept."""
+    val_fraction: float = 0.2
+    """Share of the training split held out for early stopping (and for the grid search)."""
+    seed: int = 0
+    """Seeds the validation split, the initial weights, the batch order and the dropout masks."""
+    cell: str = "peephole"
+    """Recurrent cell: 'peephole' (the paper's), 'no-peephole' (the same layer, peepholes fixed at 0), 'lstm'
+    (nn.LSTM) or 'gru' (nn.GRU)."""
+
+    def check(self) -> None:
+        """Raise :class:`ConfigError` naming the first field that is out of range."""
+        if self.dims not in DIMS:
+            raise ConfigError(f"TrainConfig.dims = {self.dims!r} is unknown; use 'xyz' or 'z'")
+        if self.cell not in CELLS:
+            raise ConfigError(f"TrainConfig.cell = {self.cell!r} is unknown; use one of {CELLS}")
+        check_range("TrainConfig.length (seconds)", self.length, 0, lo_open=True)
+        for name in ("hidden", "layers", "batch_size", "truncation", "max_epochs", "patience"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise ConfigError(f"TrainConfig.{name} = {value!r}; it must be a whole number >= 1")
+        check_range("TrainConfig.dropout", self.dropout, 0, 1, hi_open=True)
+        check_range("TrainConfig.lr", self.lr, 0, lo_open=True)
+        check_range("TrainConfig.val_fraction", self.val_fraction, 0, 1, lo_open=True, hi_open=True)
+
+    def n_frames(self, fps: float) -> int:
+        """T in frames at ``fps``: ``round(length * fps)``, at least 1."""
+        return max(1, round(self.length * fps))
+
+
+def select_inputs(x: np.ndarray, dims: str, n_frames: int, what: str = "trajectories") -> np.ndarray:
+    """First ``n_frames`` frames and the ``dims`` columns of ``x`` (n, T, 3) -> (n, n_frames, D) float32.
+
+    Raises :class:`TrajectoryError` for a wrong shape, too few frames, or NaN/infinite values.
+    """
+    x = np.asarray(x)
+    if x.ndim != 3 or x.shape[2] != 3:
+        raise TrajectoryError(f"{what}: shape {x.shape}; expected (n, T, 3) world x, y, z in metres")
+    if x.shape[1] < n_frames:
+        raise TrajectoryError(
+            f"{what}: {x.shape[1]} frames, but the model needs {n_frames}; use a shorter "
+            "length (seconds) or longer trajectories (the paper zero-pads short ones)"
+        )
+    out = np.ascontiguousarray(x[:, :n_frames, DIMS[dims]], dtype=np.float32)
+    bad = ~np.isfinite(out).all(axis=(1, 2))
+    if bad.any():
+        raise TrajectoryError(
+            f"{what}: {int(bad.sum())} trajectories hold NaN or infinite values "
+            f"(first: index {int(np.argmax(bad))}); fix or drop them"
+        )
+    return out

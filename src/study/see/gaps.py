@@ -1,0 +1,100 @@
+"""From detections to heights: fill short gaps, split at long ones, set the pixel-to-metre calibration, and
+resample to another frame rate.
+
+:func:`fill_gaps` interpolates gaps of at most ``max_gap`` frames (the paper's "simple interpolation")
+and splits the trajectory at longer ones, keeping which frames were measured and which were filled.
+Pixels to metres: image row -> height, up positive, from a ground row (the lowest position of the
+object's centre, or given) and a scale (metres per pixel, from the object's known size or given).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from study.errors import TrackingError, check_range
+from study.see.trajectory import Trajectory
+
+
+def fill_gaps(traj: Trajectory, max_gap: int) -> Trajectory:
+    """Interpolate u, v linearly over runs of at most ``max_gap`` missing frames; split at longer runs.
+
+    Filled rows get status 'filled'; the rows of each piece share a ``segment`` number; gaps at
+    the start and end of the video, and long gaps, stay missing (nothing is extrapolated).
+    """
+    check_range("max_gap", max_gap, 0, 10_000)
+    u, v = traj.u.copy(), traj.v.copy()
+    status = np.where(traj.status == 1, 1, 0).astype(np.int8)
+    seg = np.full(len(u), -1, np.int32)
+    idx = np.nonzero(status == 1)[0]
+    if len(idx) == 0:
+        return replace(traj, status=status, segment=seg)
+    s = 0
+    seg[idx[0]] = 0
+    for a, b in zip(idx[:-1], idx[1:]):
+        gap = b - a - 1
+        if gap > max_gap:
+            s += 1
+        elif gap > 0:
+            w = (np.arange(a + 1, b) - a) / (b - a)
+            u[a + 1 : b] = u[a] + w * (u[b] - u[a])
+            v[a + 1 : b] = v[a] + w * (v[b] - v[a])
+            status[a + 1 : b] = 2
+            seg[a + 1 : b] = s
+        seg[b] = s
+    return replace(traj, u=u, v=v, status=status, segment=seg)
+
+
+def calibrate(
+    traj: Trajectory,
+    *,
+    ground_v: float | None = None,
+    object_size: float | None = None,
+    metres_per_pixel: float | None = None,
+) -> Trajectory:
+    """Set the ground row and the scale that turn image rows into :attr:`Trajectory.height`.
+
+    Args:
+        ground_v: image row of the object's centre when it rests on the ground, pixels; default the
+            lowest centre position seen (largest v among measured frames).
+        object_size: the object's real diameter, metres (a tennis ball: 0.067); the scale is this over
+            the median blob diameter in pixels.
+        metres_per_pixel: the scale, if known from a distance in the scene; overrides ``object_size``.
+    With neither, heights stay in pixels.
+    """
+    m = traj.status > 0
+    if not m.any():
+        raise TrackingError(f"{traj.source}: no tracked frames to calibrate")
+    g = float(np.nanmax(traj.v[m])) if ground_v is None else float(ground_v)
+    if metres_per_pixel is not None:
+        check_range("metres_per_pixel", metres_per_pixel, 0.0, 100.0, lo_open=True)
+        return replace(traj, ground_v=g, scale=float(metres_per_pixel), units="m")
+    if object_size is not None:
+        check_range("object_size", object_size, 0.0, 100.0, lo_open=True)
+        d = float(np.nanmedian(traj.diameter[traj.status == 1]))
+        return replace(traj, ground_v=g, scale=object_size / d, units="m")
+    return replace(traj, ground_v=g, scale=1.0, units="px")
+
+
+def resample(traj: Trajectory, fps: float) -> Trajectory:
+    """The longest piece of ``traj`` resampled to ``fps`` by linear interpolation, starting at its first row.
+
+    A resampled row is 'measured' if its nearer source row was measured, else 'filled'.
+    """
+    check_range("fps", fps, 0.0, 10_000.0, lo_open=True)
+    seg = traj.longest()
+    t = seg.t[0] + np.arange(int(math.floor((seg.t[-1] - seg.t[0]) * fps + 1e-9)) + 1) / fps
+    nearest = np.clip(np.round((t - seg.t[0]) * seg.fps).astype(int), 0, len(seg.t) - 1)
+    return replace(
+        seg,
+        t=t,
+        u=np.interp(t, seg.t, seg.u),
+        v=np.interp(t, seg.t, seg.v),
+        status=seg.status[nearest],
+        segment=np.zeros(len(t), np.int32),
+        confidence=seg.confidence[nearest],
+        diameter=seg.diameter[nearest],
+        fps=float(fps),
+    )

@@ -1,0 +1,68 @@
+"""The colour tracker, end to end: a video of a thrown object in, its height series and the classifier's
+input out.
+
+:func:`track_video` detects the object in every frame (``study.see.detect``), fills short gaps and
+splits at long ones, and calibrates pixels to metres (``study.see.gaps``); :func:`to_model_input`
+resamples the result to the classifier's frame rate and cuts or zero-pads it to its input length, as
+the paper did. The pieces are importable from here too, so ``from study import track`` gives the whole
+tracker: :class:`TrackConfig` and the colour presets (``study.see.config``), :class:`Trajectory`
+(``study.see.trajectory``), the CSV file (``study.see.trackfile``) and the overlay video
+(``study.see.overlay``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from study.errors import TrajectoryError, check_range
+from study.see.config import PRESETS, TrackConfig, parse_hsv
+from study.see.detect import detect_all
+from study.see.gaps import calibrate, fill_gaps, resample
+from study.see.overlay import write_overlay
+from study.see.trackfile import read_csv, write_csv
+from study.see.trajectory import STATUS, Trajectory
+
+__all__ = ["PRESETS", "STATUS", "TrackConfig", "Trajectory", "calibrate", "detect_all", "fill_gaps", "parse_hsv",
+           "read_csv", "resample", "to_model_input", "track_video", "write_csv", "write_overlay"]
+
+
+def track_video(
+    path: str | Path,
+    cfg: TrackConfig | None = None,
+    *,
+    ground_v: float | None = None,
+    object_size: float | None = None,
+    metres_per_pixel: float | None = None,
+) -> Trajectory:
+    """Track, fill short gaps, split at long ones and calibrate: the whole pipeline for one video."""
+    cfg = cfg or TrackConfig()
+    traj = fill_gaps(detect_all(path, cfg), cfg.max_gap)
+    return calibrate(traj, ground_v=ground_v, object_size=object_size, metres_per_pixel=metres_per_pixel)
+
+
+def to_model_input(
+    traj: Trajectory,
+    fps: float,
+    n_frames: int,
+    scale: float | None = None,
+    rest_height: float = 0.0,
+) -> np.ndarray:
+    """The classifier's input for one video: (n_frames, 3) float32, world x, y, z in metres.
+
+    The longest piece of ``traj`` is resampled to ``fps``, its height (times ``scale``, metres per
+    unit of :attr:`Trajectory.height`; default 1, i.e. the trajectory's own units) plus
+    ``rest_height`` (the centre's height at rest, metres) becomes z; a single camera gives no depth,
+    so x and y are zero. Longer pieces are cut to ``n_frames``, shorter ones zero-padded at the end
+    (the paper's padding).
+    """
+    check_range("n_frames", n_frames, 1, 1e7)
+    r = resample(traj, fps)
+    z = r.height * (1.0 if scale is None else scale) + rest_height
+    if not np.isfinite(z).all():
+        raise TrajectoryError(f"{traj.source}: the height series has NaN after resampling")
+    out = np.zeros((n_frames, 3), np.float32)
+    k = min(n_frames, len(z))
+    out[:k, 2] = z[:k]
+    return out

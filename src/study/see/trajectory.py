@@ -1,0 +1,92 @@
+"""The tracked object's trajectory, one row per frame: image position, status, pieces, and heights."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from study.errors import TrackingError
+
+STATUS = ("missing", "measured", "filled")
+"""Per-frame status codes of a :class:`Trajectory` (index = code)."""
+
+
+@dataclass
+class Trajectory:
+    """The tracked object, one row per video frame (or per resampled frame).
+
+    ``status`` says for each row whether it was measured, filled by interpolation, or missing
+    (then u, v and height are NaN); ``segment`` numbers the pieces split at long gaps (-1 if missing).
+    """
+
+    t: np.ndarray = field(repr=False)
+    """(n,) float64 seconds since the first frame of the video."""
+    u: np.ndarray = field(repr=False)
+    """(n,) float64 pixels, centroid column (right positive)."""
+    v: np.ndarray = field(repr=False)
+    """(n,) float64 pixels, centroid row (down positive)."""
+    status: np.ndarray = field(repr=False)
+    """(n,) int8, index into :data:`STATUS`: 0 missing, 1 measured, 2 filled."""
+    segment: np.ndarray = field(repr=False)
+    """(n,) int32, piece number after splitting at long gaps; -1 where missing."""
+    confidence: np.ndarray = field(repr=False)
+    """(n,) float64 in [0, 1]: how disc-like and how close to the prediction the blob was; 0 if not measured."""
+    diameter: np.ndarray = field(repr=False)
+    """(n,) float64 pixels, the blob's equivalent-disc diameter; NaN if not measured."""
+    fps: float = 30.0
+    """Frames per second of the rows."""
+    source: Path | None = None
+    """The video the trajectory came from."""
+    width: int = 0
+    """Frame width of the source, pixels."""
+    height_px: int = 0
+    """Frame height of the source, pixels."""
+    ground_v: float = math.nan
+    """Image row of the object's centre at ground level, pixels."""
+    scale: float = 1.0
+    """Metres per pixel of :attr:`height` (1.0 with ``units`` 'px': height in pixels)."""
+    units: str = "px"
+    """Units of :attr:`height`: 'px' or 'm'."""
+
+    @property
+    def measured(self) -> np.ndarray:
+        """(n,) bool, frames where the tracker found the object."""
+        return self.status == 1
+
+    @property
+    def filled(self) -> np.ndarray:
+        """(n,) bool, frames filled by interpolation."""
+        return self.status == 2
+
+    @property
+    def found_fraction(self) -> float:
+        """Fraction of frames measured."""
+        return float(self.measured.mean()) if len(self.t) else 0.0
+
+    @property
+    def height(self) -> np.ndarray:
+        """(n,) float64, height of the centre above the ground row, up positive, in :attr:`units`."""
+        return (self.ground_v - self.v) * self.scale
+
+    def segments(self) -> list[Trajectory]:
+        """The pieces between long gaps, each a :class:`Trajectory` without missing rows, in time order."""
+        out = []
+        for s in np.unique(self.segment[self.segment >= 0]):
+            idx = np.nonzero(self.segment == s)[0]
+            out.append(self.take(slice(idx[0], idx[-1] + 1)))
+        return out
+
+    def longest(self) -> Trajectory:
+        """The longest piece (the earliest on a tie); raise :class:`TrackingError` if there is none."""
+        segs = self.segments()
+        if not segs:
+            raise TrackingError(f"{self.source}: the trajectory has no measured frames")
+        return max(segs, key=lambda s: (len(s.t), -s.t[0]))
+
+    def take(self, idx) -> Trajectory:
+        """The rows ``idx`` (a slice or index array) as a new trajectory."""
+        arrays = {k: getattr(self, k)[idx] for k in ("t", "u", "v", "status", "segment", "confidence", "diameter")}
+        return replace(self, **arrays)

@@ -1,0 +1,88 @@
+"""The command line as a user meets it: every command that writes answers a destination it cannot write
+with one line naming the path, exits 2 and leaves nothing behind; `--help` costs no torch."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import model_toys
+import pytest
+
+from study import cli
+from study.see import render
+from study.simulate import data
+
+# CI runs as root, where a read-only folder is still writable: these paths cannot exist at all.
+UNDER_PROC = "/proc/study-cannot-write-here"
+
+
+def one_error_line(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("study: error: "), err
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def dataset_file(tmp_path_factory) -> Path:
+    return data.save(model_toys.dataset(n=8, T=20), tmp_path_factory.mktemp("d") / "toy.npz")
+
+
+@pytest.fixture(scope="module")
+def small_video(tmp_path_factory) -> Path:
+    cfg = render.RenderConfig(width=96, height=72, duration=0.5, shadows=False)
+    qpos, qvel = render.initial_state((-0.5, 0.0, 0.8), (1.0, 0.0, 0.0))
+    return render.render(render.class_model("light"), qpos, qvel, tmp_path_factory.mktemp("v") / "v.mp4", cfg).video
+
+
+def bad_destinations(tmp_path: Path) -> list[tuple[Path, str]]:
+    """(path, what the message must name) for a path under /proc and one under a regular file."""
+    afile = tmp_path / "a-file.txt"
+    afile.write_text("not a folder\n")
+    return [(Path(UNDER_PROC) / "out", "/proc"), (afile / "out", "a-file.txt is a file, not a folder")]
+
+
+def test_synth_out(tmp_path, capsys):
+    for dest, why in bad_destinations(tmp_path):
+        rc = cli.main(["synth", "--preset", "smoke", "--out", str(dest / "x.npz"), "--no-progress"])
+        line = one_error_line(capsys)
+        assert rc == 2 and str(dest / "x.npz") in line and why in line and "choose a folder" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file.txt"]
+
+
+def test_train_out(tmp_path, dataset_file, capsys):
+    for dest, why in bad_destinations(tmp_path):
+        rc = cli.main(["train", "--data", str(dataset_file), "--dims", "z", "--length", "0.3", "--epochs", "1",
+                       "--out", str(dest / "model"), "--no-progress"])
+        line = one_error_line(capsys)
+        assert rc == 2 and str(dest / "model") in line and why in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file.txt"]
+
+
+@pytest.mark.slow  # renders a short video
+@pytest.mark.parametrize("option, name", [("--out", "x.csv"), ("--overlay", "x.mp4")])
+def test_track_out_and_overlay(tmp_path, small_video, capsys, option, name):
+    for dest, why in bad_destinations(tmp_path):
+        rc = cli.main(["track", str(small_video), "--color", "orange", option, str(dest / name), "--no-progress"])
+        line = one_error_line(capsys)
+        assert rc == 2 and str(dest / name) in line and why in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file.txt"]
+
+
+def test_book_output_folder(tmp_path, capsys):
+    (tmp_path / "_toc.yml").write_text("format: jb-book\nroot: book/notes\n")
+    (tmp_path / "book").mkdir()
+    (tmp_path / "book" / "notes.md").write_text("# Notes\n")
+    (tmp_path / "_build").write_text("a file where the book's output folder should be\n")
+    rc = cli.main(["book", "--root", str(tmp_path), "--preset", "smoke", "--no-build"])
+    line = one_error_line(capsys)
+    assert rc == 2 and "book output folder" in line and "_build is a file, not a folder" in line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["_build", "_toc.yml", "book"]
+
+
+def test_help_does_not_import_torch():
+    code = "import sys; from study import cli; cli.build_parser().format_help(); print('torch' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"
