@@ -89,6 +89,49 @@ print("beta ran with", preset)
 ```
 """
 
+# plots under whatever backend the caller's MPLBACKEND asks for, and reports progress as the package does.
+PLOTS = HEADER + """
+# Plots
+
+```{code-cell} ipython3
+:tags: [parameters]
+
+preset = "paper"
+```
+
+```{code-cell} ipython3
+import matplotlib.pyplot as plt
+from myst_nb import glue
+
+from study.progress import Progress
+
+with Progress("counting", total=3) as bar:
+    for _ in range(3):
+        bar.update()
+fig, ax = plt.subplots()
+ax.plot([0, 1], [1, 0])
+plt.show()
+fig2, ax2 = plt.subplots()
+ax2.plot([0, 1], [0, 1])
+glue("fig_glued", fig2, display=False)
+plt.close(fig2)
+```
+
+```{glue:figure} fig_glued
+A glued figure.
+```
+"""
+
+AS_TEXT = HEADER + """
+# A figure as text
+
+```{code-cell} ipython3
+from IPython.display import display
+
+display({"text/plain": "<Figure size 640x480 with 1 Axes>"}, raw=True)
+```
+"""
+
 BAD = HEADER + """
 # Bad
 
@@ -171,6 +214,15 @@ def test_build_executes_injects_and_renders(tiny: Path) -> None:
     assert "A plain page" in (tiny / "_build" / "html" / "book" / "notes.html").read_text()
 
 
+def test_injected_cell_hidden_and_values_shown_in_the_parameters_cell(tiny: Path) -> None:
+    nb = nbformat.read(executed(tiny, "alpha"), as_version=4)
+    injected = next(c for c in nb.cells if "injected-parameters" in c.metadata.tags)
+    own = next(c for c in nb.cells if "parameters" in c.metadata.get("tags", []))
+    assert "remove-cell" in injected.metadata.tags
+    assert 'preset = "smoke"  # set by `study book`; default "paper"' in own.source
+    assert 'inputs = "inputs.txt"' in own.source  # not injected: as written
+
+
 def test_second_run_executes_nothing(tiny: Path) -> None:
     before = executed(tiny, "beta").stat().st_mtime_ns
     assert ran(book.execute(tiny, "smoke")) == set()
@@ -241,6 +293,30 @@ def test_a_sphinx_warning_fails_the_html_build(tmp_path: Path) -> None:
         book.build(tmp_path, "smoke", force=False, only=None, html=True)
 
 
+@pytest.mark.slow
+def test_figures_are_images_whatever_the_callers_backend_and_progress_reaches_the_terminal(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setenv("MPLBACKEND", "Agg")  # a headless server's setting: the kernel must still show images
+    write_book(tmp_path, {"plots": PLOTS}, "format: jb-book\nroot: book/plots\n")
+    book.build(tmp_path, "smoke", force=False, only=None, html=True)
+    nb = nbformat.read(executed(tmp_path, "plots"), as_version=4)
+    images = [k for c in nb.cells for o in c.get("outputs", []) for k in o.get("data", {}) if k.endswith("image/png")]
+    assert len(images) == 2  # the plt.show() figure and the glued one
+    html = (tmp_path / "_build" / "html" / "book" / "plots.html").read_text()
+    assert html.count("<img") >= 2 and "Figure size" not in html
+    err = capsys.readouterr().err
+    assert "plots · counting" in err  # the kernel's progress, on the builder's terminal
+    assert "chapters:" in err and "executed in" in err and "the book: " in err
+
+
+def test_a_figure_shown_as_text_fails_the_chapter(tmp_path: Path) -> None:
+    write_book(tmp_path, {"astext": AS_TEXT}, "format: jb-book\nroot: book/astext\n")
+    with pytest.raises(ChapterError, match=r"astext.md: cell \d+ showed a figure as text"):
+        book.build(tmp_path, "smoke", force=False, only=None, html=False)
+    assert not executed(tmp_path, "astext").exists()
+
+
 @pytest.fixture
 def bad_book(tmp_path: Path) -> Path:
     return write_book(tmp_path, {"bad": BAD}, "format: jb-book\nroot: book/bad\n")
@@ -278,24 +354,48 @@ def test_cli_only_unknown_chapter_exits_2(tiny: Path, capsys: pytest.CaptureFixt
 
 
 @pytest.mark.slow
-def test_repo_book_builds_with_smoke_preset(tmp_path: Path) -> None:
-    """The real book, preset 'smoke', into a scratch root that links to the repo's files.
+def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The real book, preset 'smoke', in a scratch root that links to the repo's sources.
 
-    Links keep the repo's own _build (maybe a 'paper' build) untouched, while the data/ caches are
-    shared, so a second run reuses the smoke dataset.
+    Nothing is written into the project: the scratch root has its own data/ and _build/. MPLBACKEND=Agg,
+    as on many servers, must not turn the figures into text.
     """
     for entry in REPO.iterdir():
-        if entry.name not in {"_build", ".git", ".venv", ".pytest_cache"}:
+        if entry.name not in {"_build", ".git", ".venv", ".pytest_cache", "data"}:
             os.symlink(entry, tmp_path / entry.name)
-    if not (REPO / "data").exists():
-        (tmp_path / "data").mkdir()
+    (tmp_path / "data").mkdir()
+    monkeypatch.setenv("MPLBACKEND", "Agg")
     book.build(tmp_path, "smoke", force=False, only=None, html=True)
     index = tmp_path / "_build" / "html" / "book" / "intro.html"
     assert "The motion-pattern study" in index.read_text()
+    figures = 0
     for ch in book.chapters(tmp_path):
-        if ch.source.read_text().startswith("---\njupytext"):
-            assert ch.executed.is_file(), ch.stem
         page = tmp_path / "_build" / "html" / "book" / f"{ch.stem}.html"
         text = page.read_text()  # Sphinx's smart quotes turn a table's |---| into |—| when it is left as text
         assert "|---|" not in text and "|\u2014|" not in text, f"{ch.stem}: a Markdown table was rendered as text"
-    shutil.rmtree(tmp_path / "_build")
+        assert "Figure size" not in text, f"{ch.stem}: a figure was rendered as text"
+        assert "injected by papermill" not in text.lower() and "# Parameters" not in text, ch.stem
+        if ch.source.read_text().startswith("---\njupytext"):
+            nb = nbformat.read(ch.executed, as_version=4)
+            pngs = sum(k.endswith("image/png") for c in nb.cells for o in c.get("outputs", []) for k in o.get("data", {}))
+            assert text.count("<img") >= pngs, ch.stem
+            figures += pngs
+    assert figures >= 9  # the smoke book has nine figures at least, each an image
+
+
+def test_chapters_show_the_code_that_teaches_not_the_plumbing() -> None:
+    """Cells a reader sees hold no glue(...) calls (those only hand numbers to the prose: hidden cells), and
+    no code line a reader can open (visible or folded) runs past the page's edge (90 characters)."""
+    import jupytext
+
+    hidden = {"remove-cell", "remove-input"}
+    for source in sorted((REPO / "book").glob("*.md")):
+        nb = jupytext.read(source, fmt="md:myst")
+        for i, cell in enumerate(c for c in nb.cells if c.cell_type == "code"):
+            tags = set(cell.metadata.get("tags", []))
+            if tags & hidden:
+                continue
+            lines = cell.source.splitlines()
+            assert all(len(line) <= 90 for line in lines), f"{source.name}, code cell {i}: a line over 90 characters"
+            if "hide-input" not in tags:
+                assert not any("glue(" in line for line in lines), f"{source.name}, code cell {i}: glue in a shown cell"

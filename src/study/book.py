@@ -33,8 +33,11 @@ import yaml
 from tqdm import tqdm
 
 import study
+from study import nbtidy, presets
 from study.cache import canonical_json, key, source_hash, write_text_atomic
-from study.errors import ChapterError, ConfigError
+from study.errors import ChapterError, ConfigError, check_writable
+from study.progress import ENV as PROGRESS_ENV
+from study.progress import Follower
 
 EXECUTED = Path("_build/executed")
 """Where executed copies (and the staged book sources) go, relative to the root."""
@@ -191,15 +194,20 @@ def inputs_fingerprint(root: Path, parameters: dict[str, Any]) -> dict[str, Any]
 
 
 @contextlib.contextmanager
-def _kernel_environment() -> Iterator[None]:
-    """Environment the kernel inherits: headless MuJoCo, fixed hash seed, and this very ``study``."""
+def _kernel_environment(progress: Path | None = None) -> Iterator[None]:
+    """Environment the kernel inherits: headless MuJoCo, fixed hash seed, the inline matplotlib backend, the
+    progress file (``progress`` names it, see :mod:`study.progress`), and this very ``study``."""
     saved = dict(os.environ)
     os.environ.setdefault("MUJOCO_GL", "egl")
     os.environ["PYTHONHASHSEED"] = "0"
+    # Figures as images whatever the caller's MPLBACKEND (Agg, common on servers, would show them as text).
+    os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
     # The kernel must import the same package whose source the cache key hashed.
     src = str(Path(study.__file__).resolve().parent.parent)
     path = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     os.environ["PYTHONPATH"] = os.pathsep.join([src, *[p for p in path if p != src]])
+    if progress is not None:
+        os.environ[PROGRESS_ENV] = str(progress)
     try:
         yield
     finally:
@@ -259,39 +267,58 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
     Raises :class:`ChapterError` if a cell fails or the kernel dies; the partial copy goes to
     ``_build/failed/`` and any older executed copy of the chapter is removed.
     """
+    import nbformat
     import papermill
     from nbclient.exceptions import DeadKernelError
     from papermill.exceptions import PapermillExecutionError
 
     running = root / RUNNING / f"{ch.entry}.ipynb"
     running.parent.mkdir(parents=True, exist_ok=True)
+    follow = running.with_suffix(".progress")
     try:
-        with _kernel_environment():
+        with _kernel_environment(follow), Follower(follow, ch.stem):
             papermill.execute_notebook(
                 str(source_nb),
                 str(running),
                 parameters=parameters,
                 kernel_name=KERNEL,
                 cwd=str(root),
-                progress_bar=sys.stderr.isatty(),
+                progress_bar=False,  # the Follower shows what the chapter is doing instead
                 log_output=False,
                 # The kernel's own log (not the cells' output) only warns that its local TCP link is
                 # unencrypted; errors still show.
                 extra_arguments=["--IPKernelApp.log_level=ERROR"],
             )
     except (PapermillExecutionError, DeadKernelError) as e:
-        ch.executed.unlink(missing_ok=True)
-        ch.key_file.unlink(missing_ok=True)
-        ch.failed.parent.mkdir(parents=True, exist_ok=True)
-        if running.exists():
-            os.replace(running, ch.failed)
+        _keep_failed(ch, running)
         raise ChapterError(_failure_message(ch, e, nb, root)) from None
     except BaseException:
         running.unlink(missing_ok=True)
         raise
+    finally:
+        follow.unlink(missing_ok=True)
+    executed = nbformat.read(running, as_version=4)
+    as_text = nbtidy.figures_as_text(executed)
+    if as_text:
+        _keep_failed(ch, running)
+        raise ChapterError(
+            f"chapter {ch.source.relative_to(root)}: cell {as_text[0]} showed a figure as text "
+            f"('<Figure size ...>'), not as an image: the kernel's matplotlib backend is not the inline one; "
+            f"the partial copy is in {ch.failed.relative_to(root)}"
+        )
+    nbformat.write(nbtidy.show_parameters_once(executed, parameters), running)
     ch.executed.parent.mkdir(parents=True, exist_ok=True)
     os.replace(running, ch.executed)  # same filesystem: the complete copy appears in one step
     ch.failed.unlink(missing_ok=True)
+
+
+def _keep_failed(ch: Chapter, running: Path) -> None:
+    """Move a failed chapter's partial copy to ``_build/failed/`` and forget its old executed copy."""
+    ch.executed.unlink(missing_ok=True)
+    ch.key_file.unlink(missing_ok=True)
+    ch.failed.parent.mkdir(parents=True, exist_ok=True)
+    if running.exists():
+        os.replace(running, ch.failed)
 
 
 def _write_key(ch: Chapter, base: dict[str, Any], parameters: dict[str, Any], root: Path, seconds: float) -> None:
@@ -344,11 +371,10 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     package = source_hash()
     timings: dict[str, dict[str, Any]] = {}
     done: list[tuple[Chapter, dict[str, Any], dict[str, Any], float]] = []
-    bar = tqdm(chs, desc="chapters", unit="chapter", file=sys.stderr, dynamic_ncols=True)
     try:
         with tempfile.TemporaryDirectory(prefix="study-book-") as tmp:
-            for ch in bar:
-                bar.set_postfix_str(ch.stem)
+            for n, ch in enumerate(chs, 1):
+                where = f"[{n}/{len(chs)}] {ch.stem}"
                 nb = _read_notebook(ch.source)
                 if not _is_notebook(nb):  # a plain page: placed, never executed
                     _copy_if_changed(ch.source, root / EXECUTED / f"{ch.entry}.md")
@@ -369,8 +395,9 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                     seconds = stored.get("seconds", 0.0)
                     timings[ch.stem] = {"seconds": seconds, "cached": True, **({"stale": True} if action == "kept" else {})}
                     note = f"executed earlier in {seconds:.1f} s" if action == "cached" else "out of date; not in --only"
-                    tqdm.write(f"{ch.stem}: {action} ({note})", file=sys.stderr)
+                    tqdm.write(f"{where}: {action} ({note})", file=sys.stderr)
                     continue
+                tqdm.write(f"{where}: executing", file=sys.stderr)
                 t0 = time.perf_counter()
                 try:
                     _execute(ch, probe, nb, injected, root)
@@ -380,9 +407,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                 seconds = time.perf_counter() - t0
                 done.append((ch, base, parameters, seconds))
                 timings[ch.stem] = {"seconds": round(seconds, 3), "cached": False}
-                tqdm.write(f"{ch.stem}: executed in {seconds:.1f} s", file=sys.stderr)
+                tqdm.write(f"{where}: executed in {_duration(seconds)}", file=sys.stderr)
     finally:
-        bar.close()
         # Keys last, once every chapter of this run has written what it writes: a chapter whose
         # input folder a later chapter adds to is not re-executed next time for that reason alone.
         for ch, base, parameters, seconds in done:
@@ -391,6 +417,28 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
             record = {"preset": preset, "chapters": timings}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
     return timings
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.1f} s" if seconds < 60 else f"{int(seconds // 60)} min {seconds % 60:.0f} s"
+
+
+def summary(timings: dict[str, dict[str, Any]]) -> str:
+    """The table :func:`build` prints at the end: each chapter, whether it ran, and how long it took."""
+    width = max(len(s) for s in timings)
+    lines = []
+    for stem, t in timings.items():
+        if t.get("page"):
+            what = "page (copied)"
+        elif t.get("failed"):
+            what = f"FAILED after {_duration(t['seconds'])}"
+        elif t["cached"]:
+            what = f"cached (took {_duration(t['seconds'])} when executed)" + (", out of date" if t.get("stale") else "")
+        else:
+            what = f"executed in {_duration(t['seconds'])}"
+        lines.append(f"  {stem:<{width}}  {what}")
+    ran = sum(t["seconds"] for t in timings.values() if not t["cached"])
+    return "\n".join(["chapters:", *lines, f"  {'total':<{width}}  {_duration(ran)} executing this time"])
 
 
 def _stage(root: Path) -> Path:
@@ -447,12 +495,14 @@ def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bo
     The executed copies land in ``<root>/_build/executed/book/``, their timings in
     ``_build/executed/timings.json``, and the HTML in ``<root>/_build/html``.
     """
-    if preset not in ("smoke", "paper"):
-        raise ConfigError(f"preset = {preset!r}: unknown; use 'smoke' or 'paper'")
+    presets.check(preset)
     root = Path(root).resolve()
     if not root.is_dir():
         raise ConfigError(f"--root {root}: no such folder")
-    execute(root, preset, force=force, only=only)
+    check_writable(root / EXECUTED / "timings.json", "book output folder")
+    timings = execute(root, preset, force=force, only=only)
+    print(summary(timings), file=sys.stderr)
     if html:
         index = render(root) / "index.html"
+        print(f"the book: {index}", file=sys.stderr)
         print(index)
