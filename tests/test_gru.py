@@ -30,7 +30,7 @@ def test_compiled_gru_equals_nn_gru_outputs_and_gradients(with_state):
     net = GRU(3, 5, 2).double()
     x = torch.randn(4, 7, 3, dtype=torch.float64, requires_grad=True)
     hx = torch.randn(2, 4, 5, dtype=torch.float64, requires_grad=True) if with_state else None
-    assert net._compiled(x)
+    assert net._compiled(x, hx)
     fast = _run(net, x, hx, compiled=True)
     ref = _run(net, x, hx, compiled=False)
     torch.testing.assert_close(fast[0], ref[0], atol=1e-12, rtol=0)

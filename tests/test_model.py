@@ -263,3 +263,43 @@ def test_native_build_goes_to_the_platform_cache(monkeypatch, tmp_path):
     assert native.cache_dir() == tmp_path / "study" / "native"
     monkeypatch.setenv("STUDY_NATIVE_DIR", str(tmp_path / "elsewhere"))
     assert native.cache_dir() == tmp_path / "elsewhere"
+
+
+def _poison(net: Classifier, x: torch.Tensor, case: str) -> torch.Tensor:
+    """Put a NaN or an infinity into one sample's input, or into one recurrent weight (in place)."""
+    bad = float("nan") if "nan" in case else float("inf")
+    x = x.clone()
+    if case.endswith("input"):
+        x[1, 5, 0] = bad
+    else:
+        w = next(p for name, p in net.named_parameters() if "weight_hh" in name)
+        with torch.no_grad():
+            w.view(-1)[3] = bad
+    return x
+
+
+@pytest.mark.parametrize("cell", ["peephole", "gru"])
+@pytest.mark.parametrize("case", ["nan-input", "inf-input", "nan-weight", "inf-weight"])
+def test_non_finite_numbers_propagate_as_in_pytorch(cell, case):
+    """float32, compiled loop against PyTorch's own: NaN and infinities give the same outputs and gradients,
+    NaN where PyTorch has NaN (the compiled loop alone would have clamped them into finite numbers)."""
+    if native.load() is None:
+        pytest.skip("the compiled loop is not available here (no C++ compiler)")
+    torch.manual_seed(5)
+    net = Classifier(3, hidden=16, cell=cell).eval()
+    x = _poison(net, torch.randn(4, 20, 3), case)
+    results = []
+    for loop in (contextlib.nullcontext(), native.disabled()):
+        with loop:
+            net.zero_grad()
+            out = net(x)
+            out.sum().backward()
+        results.append((out.detach(), [p.grad.clone() for p in net.parameters()]))
+    (a, ga), (b, gb) = results
+    if case != "inf-input":  # an infinite input saturates the gates, in PyTorch too: finite logits
+        assert not torch.isfinite(a).all()  # the poison reached the logits
+    torch.testing.assert_close(a, b, equal_nan=True, atol=1e-5, rtol=0)
+    for u, v in zip(ga, gb):
+        torch.testing.assert_close(u, v, equal_nan=True, atol=1e-5, rtol=1e-4)
+    if case == "nan-input":
+        assert torch.isfinite(a[[0, 2, 3]]).all() and not torch.isfinite(a[1]).any()  # one sample only

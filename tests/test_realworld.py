@@ -50,8 +50,11 @@ def test_classify_rows_and_accuracy(rendered_set):
     assert [r["file"] for r in rows] == [v.path.name for v in rendered_set]
     for r in rows:
         assert r["error"] == "" and 0.9 <= r["found"] <= 1.0 and r["p_light"] + r["p_heavy"] == pytest.approx(1.0)
-    acc = realworld.per_class_accuracy(rows)
+    acc = realworld.per_class_interval(rows)
     assert set(acc) == {"light", "heavy"}
+    for c, iv in acc.items():
+        k = sum(r["correct"] for r in rows if r["label"] == c)
+        assert iv.value == k / 1 and iv.lo <= iv.value <= iv.hi and "Wilson" in iv.method
     err = realworld.tracking_error(rendered_set)
     assert err["found"] >= 0.9 and err["mean_px"] < 3.0
 
@@ -100,7 +103,7 @@ def test_untrackable_video_is_a_row_not_a_crash(tmp_path):
     bad.write_text("not a video")
     rows = realworld.classify(HeightRangeModel(), [realworld.Video(bad, "light")], progress=False)
     assert rows[0]["error"] and "bad.mp4" in rows[0]["error"]
-    assert np.isnan(realworld.per_class_accuracy(rows)["light"])
+    assert realworld.per_class_interval(rows)["light"] is None  # nothing classified, no interval
 
 
 @pytest.mark.slow

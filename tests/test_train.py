@@ -46,7 +46,8 @@ def test_same_seed_same_weights_bitwise(ds, tm):
 def test_history_and_contract(ds, tm):
     assert tm.dims == "xyz" and tm.fps == 30.0 and tm.n_frames == 15 and tm.data_key == "toy"
     assert 1 <= len(tm.history) <= TINY.max_epochs
-    assert set(tm.history[0]) == {"epoch", "train_loss", "val_loss", "val_accuracy"}
+    assert set(tm.history[0]) == {"epoch", "train_loss", "val_loss", "val_accuracy", "lr"}
+    assert tm.diverged_epoch is None
     p = tm.predict_proba(ds.test.x)
     assert p.shape == (24, 2) and p.dtype == np.float64
     np.testing.assert_allclose(p.sum(axis=1), 1.0, atol=1e-6)
@@ -189,3 +190,119 @@ def test_cli_bad_input_one_line_exit_2(tmp_path, ds, capsys):
     assert "no such directory" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         cli.main(["train", "--data", str(path), "--dims", "xy", "--length", "1", "--out", str(tmp_path / "m")])
+
+
+# --- the training protocol: forget bias, early stopping, clipping, schedule, divergence --------------
+
+FROZEN = dataclasses.replace(TINY, lr=1e-12, dims="z")  # steps too small to change a float32 weight
+
+
+@torch.no_grad()
+def _forget_biases(net) -> torch.Tensor:
+    H = net.head.in_features
+    if net.cell_type in ("peephole", "no-peephole"):
+        return torch.stack([layer.bias[H : 2 * H] for layer in net.rnn.layers])
+    return torch.stack([getattr(net.rnn, f"bias_ih_l{k}")[H : 2 * H] + getattr(net.rnn, f"bias_hh_l{k}")[H : 2 * H]
+                        for k in range(net.rnn.num_layers)])
+
+
+@pytest.mark.parametrize("cell", ["peephole", "no-peephole", "lstm"])
+def test_forget_bias_is_added_to_every_forget_gate(cell):
+    from study.learn.model import Classifier
+
+    torch.manual_seed(0)
+    a = Classifier(3, hidden=8, cell=cell)
+    b = Classifier(3, hidden=8, cell=cell)
+    b.load_state_dict(a.state_dict())
+    b.init_forget_gates(1.0)
+    torch.testing.assert_close(_forget_biases(b), _forget_biases(a) + 1.0)
+    before = {k: v.clone() for k, v in a.state_dict().items()}
+    a.init_forget_gates(0.0)
+    assert all(torch.equal(before[k], v) for k, v in a.state_dict().items())
+
+
+@pytest.mark.parametrize("cell", ["peephole", "lstm"])
+def test_chrono_initialisation_spans_the_input(cell):
+    from study.learn.model import Classifier
+
+    torch.manual_seed(0)
+    net = Classifier(1, hidden=64, cell=cell)
+    net.init_forget_gates(0.0, chrono_frames=240)
+    f = _forget_biases(net)
+    assert f.min() >= 0 and f.max() <= np.log(239) + 1e-5 and f.max() > np.log(100)  # log U(1, T - 1)
+    H = 64
+    layer_bias = net.rnn.layers[0].bias if cell == "peephole" else net.rnn.bias_ih_l0
+    torch.testing.assert_close(layer_bias[:H], -layer_bias[H : 2 * H])  # input gate: the negative
+
+
+def test_gru_has_no_forget_gate_to_initialise():
+    from study.learn.model import Classifier
+
+    torch.manual_seed(0)
+    net = Classifier(1, hidden=8, cell="gru")
+    before = {k: v.clone() for k, v in net.state_dict().items()}
+    net.init_forget_gates(1.0, chrono_frames=50)
+    assert all(torch.equal(before[k], v) for k, v in net.state_dict().items())
+
+
+def test_fit_starts_from_the_configured_forget_bias(ds):
+    def mean_forget(bias):
+        tm = train.fit(ds, dataclasses.replace(FROZEN, forget_bias=bias, max_epochs=1), progress=False)
+        return float(_forget_biases(tm.net).mean())
+
+    assert mean_forget(1.0) == pytest.approx(mean_forget(0.0) + 1.0, abs=1e-4)
+
+
+@pytest.mark.parametrize("min_epochs, expected", [(0, 2), (5, 5)])
+def test_early_stopping_cannot_fire_before_min_epochs(ds, min_epochs, expected):
+    """No weight moves, so the first epoch stays the best: patience 1 stops at the second epoch, unless
+    the minimum holds the run longer."""
+    cfg = dataclasses.replace(FROZEN, patience=1, min_epochs=min_epochs, max_epochs=10)
+    tm = train.fit(ds, cfg, progress=False)
+    assert len(tm.history) == expected and tm.best_epoch == 0
+
+
+def test_plateau_schedule_halves_the_rate_when_validation_stalls(ds):
+    cfg = dataclasses.replace(FROZEN, lr=1e-6, lr_schedule="plateau", patience=4, min_epochs=6, max_epochs=6)
+    lrs = [h["lr"] for h in train.fit(ds, cfg, progress=False).history]
+    assert lrs[0] == cfg.lr and lrs[-1] < lrs[0] and all(b <= a for a, b in zip(lrs, lrs[1:]))
+
+
+def test_clipping_bounds_the_gradient_each_step_sees(ds, monkeypatch):
+    norms: list[float] = []
+    step = torch.optim.Adam.step
+
+    def recording_step(self, *args, **kwargs):
+        grads = [p.grad for group in self.param_groups for p in group["params"] if p.grad is not None]
+        norms.append(float(torch.linalg.vector_norm(torch.stack([torch.linalg.vector_norm(g) for g in grads]))))
+        return step(self, *args, **kwargs)
+
+    monkeypatch.setattr(torch.optim.Adam, "step", recording_step)
+    train.fit(ds, dataclasses.replace(TINY, dims="z", max_epochs=1, clip_norm=1e-3), progress=False)
+    assert norms and max(norms) <= 1e-3 * (1 + 1e-5)
+    norms.clear()
+    train.fit(ds, dataclasses.replace(TINY, dims="z", max_epochs=1), progress=False)
+    assert max(norms) > 1e-2  # unclipped, the gradients are far larger
+
+
+def test_a_diverged_run_says_so_and_keeps_finite_weights(ds, tmp_path):
+    cfg = dataclasses.replace(TINY, dims="z", lr=1e30, max_epochs=5, min_epochs=5)
+    tm = train.fit(ds, cfg, progress=False)
+    assert tm.diverged_epoch is not None and math.isnan(tm.history[-1]["train_loss"])
+    assert all(torch.isfinite(v).all() for v in tm.net.state_dict().values())
+    assert train.load(tm.save(tmp_path / "m")).diverged_epoch == tm.diverged_epoch
+
+
+def test_a_format_1_model_reads_with_the_old_meaning_and_a_gap_is_refused(tm, tmp_path):
+    folder = tm.save(tmp_path / "old")
+    meta = json.loads((folder / "meta.json").read_text())
+    cfg = json.loads((folder / "config.json").read_text())
+    for name in ("min_epochs", "forget_bias", "forget_init", "clip_norm", "lr_schedule"):
+        del cfg[name]
+    (folder / "config.json").write_text(json.dumps(cfg))
+    (folder / "meta.json").write_text(json.dumps({**meta, "format": "study.model/1"}))
+    old = train.load(folder)
+    assert (old.config.forget_bias, old.config.min_epochs, old.config.clip_norm) == (0.0, 0, 0.0)
+    (folder / "meta.json").write_text(json.dumps(meta))  # format 2 must carry every field
+    with pytest.raises(ModelError, match="lacks clip_norm, forget_bias, forget_init, lr_schedule, min_epochs"):
+        train.load(folder)

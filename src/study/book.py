@@ -33,7 +33,7 @@ import yaml
 from tqdm import tqdm
 
 import study
-from study import nbtidy, presets
+from study import nbtidy, presets, results
 from study.cache import canonical_json, key, source_hash, write_text_atomic
 from study.errors import ChapterError, ConfigError, check_writable
 from study.progress import ENV as PROGRESS_ENV
@@ -73,6 +73,11 @@ class Chapter:
     @property
     def key_file(self) -> Path:
         return self.root / EXECUTED / f"{self.entry}.key.json"
+
+    @property
+    def results_part(self) -> Path:
+        """The numbers this chapter reported in its last run (``study.results``)."""
+        return self.root / EXECUTED / "results" / f"{self.entry}.json"
 
     @property
     def failed(self) -> Path:
@@ -194,9 +199,10 @@ def inputs_fingerprint(root: Path, parameters: dict[str, Any]) -> dict[str, Any]
 
 
 @contextlib.contextmanager
-def _kernel_environment(progress: Path | None = None) -> Iterator[None]:
+def _kernel_environment(progress: Path | None = None, results_part: Path | None = None) -> Iterator[None]:
     """Environment the kernel inherits: headless MuJoCo, fixed hash seed, the inline matplotlib backend, the
-    progress file (``progress`` names it, see :mod:`study.progress`), and this very ``study``."""
+    progress file (:mod:`study.progress`), the chapter's results part (:mod:`study.results`), and this
+    very ``study``."""
     saved = dict(os.environ)
     os.environ.setdefault("MUJOCO_GL", "egl")
     os.environ["PYTHONHASHSEED"] = "0"
@@ -208,6 +214,8 @@ def _kernel_environment(progress: Path | None = None) -> Iterator[None]:
     os.environ["PYTHONPATH"] = os.pathsep.join([src, *[p for p in path if p != src]])
     if progress is not None:
         os.environ[PROGRESS_ENV] = str(progress)
+    if results_part is not None:
+        os.environ[results.ENV] = str(results_part)
     try:
         yield
     finally:
@@ -275,8 +283,9 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
     running = root / RUNNING / f"{ch.entry}.ipynb"
     running.parent.mkdir(parents=True, exist_ok=True)
     follow = running.with_suffix(".progress")
+    ch.results_part.unlink(missing_ok=True)  # written afresh by this run, or not at all
     try:
-        with _kernel_environment(follow), Follower(follow, ch.stem):
+        with _kernel_environment(follow, ch.results_part), Follower(follow, ch.stem):
             papermill.execute_notebook(
                 str(source_nb),
                 str(running),
@@ -316,6 +325,7 @@ def _keep_failed(ch: Chapter, running: Path) -> None:
     """Move a failed chapter's partial copy to ``_build/failed/`` and forget its old executed copy."""
     ch.executed.unlink(missing_ok=True)
     ch.key_file.unlink(missing_ok=True)
+    ch.results_part.unlink(missing_ok=True)
     ch.failed.parent.mkdir(parents=True, exist_ok=True)
     if running.exists():
         os.replace(running, ch.failed)
@@ -416,6 +426,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         if timings:
             record = {"preset": preset, "chapters": timings}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
+            results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
 
 

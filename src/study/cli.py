@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import re
 import sys
 from collections.abc import Callable, Sequence
@@ -125,7 +126,7 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_train(sub: argparse._SubParsersAction) -> None:
-    from study.learn.config import CELLS, DIMS, TrainConfig  # no torch: `study --help` stays fast
+    from study.learn.config import CELLS, DIMS, FORGET_INITS, LR_SCHEDULES, TrainConfig  # no torch: fast --help
 
     p = sub.add_parser(
         "train",
@@ -142,9 +143,9 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="model directory to write (replaced if it exists)")
     p.add_argument("--dims", choices=list(DIMS), required=True, help=_plain(field_docs(TrainConfig)["dims"]))
     p.add_argument("--length", type=float, required=True, metavar="SECONDS", help=_plain(field_docs(TrainConfig)["length"]))
-    _add_fields(p, TrainConfig, ["seed", "cell", "max_epochs", "lr", "batch_size", "truncation", "dropout", "patience",
-                                 "hidden", "layers", "val_fraction"],
-                flags={"max_epochs": "--epochs"}, choices={"cell": CELLS})
+    _add_fields(p, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig) if f.name not in ("dims", "length")],
+                flags={"max_epochs": "--epochs"},
+                choices={"cell": CELLS, "forget_init": FORGET_INITS, "lr_schedule": LR_SCHEDULES})
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
@@ -310,8 +311,47 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
+def _add_results(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "results",
+        help="list a build's numbers with their intervals, or compare two builds",
+        description=(
+            "Read a results file written by `study book` (_build/results.json: every number of the book "
+            "with its 95 % interval, the paper's number and the verdict) and print it. With --compare, "
+            "pair its numbers with another build's and list those that moved: one build's value outside "
+            "the other's interval. Exit status 0 either way (2 for a missing or malformed file)."
+        ),
+    )
+    p.add_argument("file", type=Path, nargs="?", default=Path("_build/results.json"),
+                   help="results file (default: %(default)s)")
+    p.add_argument("--compare", type=Path, metavar="OTHER", default=None, help="another build's results file")
+    p.add_argument("--all", action="store_true", help="with --compare, list every shared number, not only those that moved")
+
+    def run(a: argparse.Namespace) -> int:
+        from study import results
+
+        mine = results.load(a.file)
+        if a.compare is None:
+            for n in mine.values():
+                paper = "" if n.paper is None else f"  paper {results.fmt_value(n.paper, n.unit)}"
+                verdict = f"  {n.verdict}" if n.verdict else ""
+                print(f"{n.name}: {results.fmt(n)}{paper}{verdict}")
+            return 0
+        other = results.load(a.compare)
+        pairs, only_a, only_b = results.compare(mine, other)
+        moved = [m for m in pairs if m.moved]
+        for m in pairs if a.all else moved:
+            flag = "MOVED" if m.moved else "same "
+            print(f"{flag} {m.name}: {results.fmt(m.a)}  vs  {results.fmt(m.b)}")
+        print(f"{len(moved)} of {len(pairs)} shared numbers moved outside the other build's interval; "
+              f"{len(only_a)} only in {a.file}, {len(only_b)} only in {a.compare}")
+        return 0
+
+    p.set_defaults(run=run)
+
+
 COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
-    _add_synth, _add_book, _add_train, _add_evaluate, _add_track, _add_classify,
+    _add_synth, _add_book, _add_train, _add_evaluate, _add_track, _add_classify, _add_results,
 ]
 
 
@@ -341,6 +381,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("study: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `study results | head`: the reader has gone, nothing more to say
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # so the exit's flush cannot fail again
+        return 0
 
 
 if __name__ == "__main__":

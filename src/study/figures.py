@@ -88,3 +88,45 @@ def save(fig: Figure, path: str | Path, dpi: float | None = None) -> Path:
         with atomic_path(target) as tmp:
             fig.savefig(tmp, format=fmt, dpi=dpi or STYLE["savefig.dpi"], metadata=_METADATA[fmt])
     return target
+
+
+DIMS_NAMES = {"xyz": "X, Y, Z", "z": "Z only"}
+DIMS_COLORS = {"xyz": OKABE_ITO["blue"], "z": OKABE_ITO["orange"]}
+"""Colour of each input in every figure that compares them."""
+
+
+def accuracy_vs_length(summary: list[dict], rows: list[dict], long_summary: list[dict] = ()) -> Figure:
+    """The paper's Figure 4, ours: test accuracy against input length, one panel per input (X, Y, Z; Z).
+
+    ``summary``: ``study.experiments.summarise(rows, ("dims", "length"))`` (mean and 95 % interval,
+    drawn as a line and a band); ``rows``: the single runs (dots; a cross for a run that failed to
+    train); ``long_summary``: the long-memory variant's summary, drawn as open diamonds with error bars.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
+    for ax, d in zip(axes, ("xyz", "z")):
+        c = DIMS_COLORS[d]
+        s = sorted((r for r in summary if r["dims"] == d), key=lambda r: r["length"])
+        L = [r["length"] for r in s]
+        ax.fill_between(L, [100 * r["interval"].lo for r in s], [100 * r["interval"].hi for r in s],
+                        color=c, alpha=0.2, linewidth=0)
+        ax.plot(L, [100 * r["mean"] for r in s], "o-", color=c, label="paper's network (mean, 95 % CI)")
+        runs = [r for r in rows if r["dims"] == d]
+        for failed, marker, colour in ((False, ".", c), (True, "x", "black")):
+            pts = [r for r in runs if bool(r["failed"]) == failed]
+            ax.plot([r["length"] for r in pts], [100 * r["accuracy"] for r in pts], marker, color=colour,
+                    alpha=0.5 if not failed else 1.0, markersize=7 if failed else 5,
+                    label=f"failed to train ({len(pts)} runs)" if failed else None)
+        m = sorted((r for r in long_summary if r["dims"] == d), key=lambda r: r["length"])
+        if m:
+            ax.errorbar([r["length"] for r in m], [100 * r["mean"] for r in m],
+                        yerr=[[100 * (r["mean"] - r["interval"].lo) for r in m],
+                              [100 * (r["interval"].hi - r["mean"]) for r in m]],
+                        fmt="D", markerfacecolor="none", color="black", capsize=3,
+                        label="memory that spans the input (chrono, full BPTT)")
+        ax.axhline(50, color="0.5", linestyle=":", linewidth=1, label="chance")
+        ax.set(title=DIMS_NAMES[d], xlabel="input length T (s)")
+    axes[0].set_ylabel("test accuracy (%)")
+    axes[0].legend(fontsize=8, loc="lower left")
+    return fig

@@ -32,12 +32,13 @@ class Progress:
         self.stage, self.total, self.note, self.done = stage, int(total), note, 0
         self.bar = tqdm(total=total, desc=stage, unit=unit, disable=not show, leave=False)
         self.path = os.environ.get(ENV) or None
+        self.id = f"{os.getpid()}.{id(self)}"  # two stages of the same name are two bars
         self._emit()
 
     def _emit(self) -> None:
         if self.path is None:
             return
-        line = json.dumps({"stage": self.stage, "done": self.done, "total": self.total, "note": self.note})
+        line = json.dumps({"stage": self.stage, "id": self.id, "done": self.done, "total": self.total, "note": self.note})
         try:
             with open(self.path, "a") as f:
                 f.write(line + "\n")
@@ -74,7 +75,7 @@ class Follower:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._bar: tqdm | None = None
-        self._stage: str | None = None
+        self._stage: tuple[str, str] | None = None
         self._offset = 0
 
     def __enter__(self) -> Follower:
@@ -108,14 +109,15 @@ class Follower:
         for line in complete.splitlines():
             try:
                 msg = json.loads(line)
-                self._show(str(msg["stage"]), int(msg["done"]), int(msg["total"]), str(msg.get("note", "")))
+                self._show(str(msg["stage"]), str(msg.get("id", "")), int(msg["done"]), int(msg["total"]),
+                           str(msg.get("note", "")))
             except (ValueError, KeyError, TypeError):
                 continue
 
-    def _show(self, stage: str, done: int, total: int, note: str) -> None:
-        if stage != self._stage:
+    def _show(self, stage: str, ident: str, done: int, total: int, note: str) -> None:
+        if (stage, ident) != self._stage:
             self._close_bar()
-            self._stage = stage
+            self._stage = (stage, ident)
             if total == 0:
                 tqdm.write(f"{self.label} · {stage}: nothing to do{f' ({note})' if note else ''}", file=self.file)
                 return

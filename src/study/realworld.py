@@ -26,6 +26,7 @@ import numpy as np
 from study import CLASSES, cache
 from study.simulate import measure
 from study.errors import ConfigError, DataError, StudyError
+from study.learn.metrics import Interval, wilson
 from study.progress import Progress
 from study.see import render, track
 
@@ -232,7 +233,7 @@ def trained_z_model(dataset, preset_name: str, data_dir: str | Path = "data", pr
     from study.learn import train
 
     p = experiments.preset(preset_name)
-    cfg = experiments.best_config(experiments.grid(dataset, p, data_dir=data_dir, progress=progress), p)
+    cfg = experiments.best_config(experiments.grid(dataset, p, "peephole", data_dir=data_dir, progress=progress), p)
     folder = experiments.model_dir(dataset, cfg, data_dir)
     if folder.is_dir():
         try:
@@ -244,12 +245,13 @@ def trained_z_model(dataset, preset_name: str, data_dir: str | Path = "data", pr
     return tm
 
 
-def per_class_accuracy(rows: list[dict[str, Any]]) -> dict[str, float]:
-    """Accuracy per true class over the rows that were classified (NaN for a class with none)."""
-    out = {}
+def per_class_interval(rows: list[dict[str, Any]]) -> dict[str, Interval | None]:
+    """Accuracy per true class over the rows that were classified, with its Wilson interval (None for a
+    class with no classified video): for 20 videos a bootstrap would understate the uncertainty."""
+    out: dict[str, Interval | None] = {}
     for c in CLASSES:
-        ok = [r["correct"] for r in rows if r["label"] == c and not r.get("error")]
-        out[c] = float(np.mean(ok)) if ok else math.nan
+        ok = [bool(r["correct"]) for r in rows if r["label"] == c and not r.get("error")]
+        out[c] = wilson(sum(ok), len(ok)) if ok else None
     return out
 
 

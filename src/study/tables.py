@@ -34,3 +34,21 @@ def pct(x: float, digits: int = 1) -> str:
 def pct_pm(mean: float, std: float, digits: int = 1) -> str:
     """Mean and standard deviation of a fraction as ``'81.2 ± 1.3 %'``."""
     return f"{100 * mean:.{digits}f} ± {100 * std:.{digits}f} %"
+
+
+def pct_ci(interval: Any, digits: int = 1) -> str:
+    """An :class:`study.learn.metrics.Interval` of a fraction as ``'81.2 % [79.9, 82.4]'``."""
+    return f"{100 * interval.value:.{digits}f} % [{100 * interval.lo:.{digits}f}, {100 * interval.hi:.{digits}f}]"
+
+
+def runs_note(summary: Mapping[str, Any]) -> str:
+    """``''``, or ``'2 of 5 failed to train, 1 diverged, 1 at the epoch cap'`` for a summary row of
+    ``study.experiments.summarise``."""
+    parts = []
+    if summary.get("failed"):
+        parts.append(f"{summary['failed']} of {summary['n']} failed to train")
+    if summary.get("diverged"):
+        parts.append(f"{summary['diverged']} diverged")
+    if summary.get("capped"):
+        parts.append(f"{summary['capped']} at the epoch cap")
+    return ", ".join(parts)

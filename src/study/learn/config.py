@@ -22,6 +22,12 @@ at zero (an LSTM without peepholes on the same compiled loop: the ablation's con
 ``nn.GRU`` (as :class:`study.learn.gru.GRU`, on a compiled loop too)."""
 
 
+FORGET_INITS = ("constant", "chrono")
+"""How the forget gates' biases start: all at ``forget_bias``, or chrono (Tallec & Ollivier 2018)."""
+LR_SCHEDULES = ("constant", "plateau")
+"""Learning-rate schedules: fixed, or halved when the validation loss stalls for ``patience // 4`` epochs."""
+
+
 @dataclass(frozen=True)
 class TrainConfig:
     """Everything that determines a trained model, besides the data."""
@@ -42,10 +48,24 @@ class TrainConfig:
     """Trajectories per gradient step."""
     truncation: int = 30
     """Truncated-BPTT length in frames: the loss back-propagates through at most this many last frames."""
-    max_epochs: int = 60
+    max_epochs: int = 150
     """Upper bound on passes over the training split."""
-    patience: int = 10
+    patience: int = 20
     """Stop after this many epochs without a lower validation loss; the best epoch's weights are kept."""
+    min_epochs: int = 30
+    """Early stopping cannot stop a run before this many epochs (so it cannot fire on the initial plateau);
+    ``max_epochs`` still ends it."""
+    forget_bias: float = 1.0
+    """Added to the forget gates' biases at initialisation (TensorFlow's LSTMCell default, which the paper
+    used); the GRU, which has no forget gate, ignores it."""
+    forget_init: str = "constant"
+    """'constant' (every forget bias starts at forget_bias more than the uniform draw) or 'chrono' (biases
+    log U(1, T - 1), input gates the negative, T the input frames: memory that spans the input)."""
+    clip_norm: float = 1.0
+    """Clip the gradient's global norm to this before each step; 0: no clipping."""
+    lr_schedule: str = "constant"
+    """'constant', or 'plateau': halve the learning rate when the validation loss has not improved for a
+    quarter of ``patience`` epochs."""
     val_fraction: float = 0.2
     """Share of the training split held out for early stopping (and for the grid search)."""
     seed: int = 0
@@ -65,6 +85,14 @@ class TrainConfig:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ConfigError(f"TrainConfig.{name} = {value!r}; it must be a whole number >= 1")
+        if not isinstance(self.min_epochs, int) or isinstance(self.min_epochs, bool) or self.min_epochs < 0:
+            raise ConfigError(f"TrainConfig.min_epochs = {self.min_epochs!r}; it must be a whole number >= 0")
+        if self.forget_init not in FORGET_INITS:
+            raise ConfigError(f"TrainConfig.forget_init = {self.forget_init!r} is unknown; use one of {FORGET_INITS}")
+        if self.lr_schedule not in LR_SCHEDULES:
+            raise ConfigError(f"TrainConfig.lr_schedule = {self.lr_schedule!r} is unknown; use one of {LR_SCHEDULES}")
+        check_range("TrainConfig.forget_bias", self.forget_bias, -10, 10)
+        check_range("TrainConfig.clip_norm", self.clip_norm, 0)
         check_range("TrainConfig.dropout", self.dropout, 0, 1, hi_open=True)
         check_range("TrainConfig.lr", self.lr, 0, lo_open=True)
         check_range("TrainConfig.val_fraction", self.val_fraction, 0, 1, lo_open=True, hi_open=True)
@@ -95,3 +123,9 @@ def select_inputs(x: np.ndarray, dims: str, n_frames: int, what: str = "trajecto
             f"(first: index {int(np.argmax(bad))}); fix or drop them"
         )
     return out
+
+
+OLD_MEANING: dict[str, object] = {"min_epochs": 0, "forget_bias": 0.0, "forget_init": "constant", "clip_norm": 0.0,
+                                  "lr_schedule": "constant"}
+"""What the fields added with model format 2 meant before they existed: how a model saved in format 1 was
+trained (no minimum, no forget bias, no clipping, a constant learning rate)."""

@@ -5,7 +5,8 @@ model saved with one loads into the other. Its forward runs each layer through :
 one BLAS call and one fused elementwise pass per time step in ``gru.cpp`` (:mod:`study.learn.native`), a
 hand-written backward, and the weight gradients as single matrix products over all steps. Where the
 compiled loop cannot run (CUDA, other dtypes, ``study.learn.native`` disabled or unavailable, inter-layer
-dropout, unbatched input) it is plain ``nn.GRU``.
+dropout, unbatched input, a NaN or infinity in the input, state or weights) it is plain ``nn.GRU``; a
+gradient that is not finite goes back through :func:`gru_reference` instead of the compiled loop.
 
 Shapes: B batch, T frames, D input dims, H hidden units, L layers; batch-first like the classifier.
 """
@@ -38,12 +39,14 @@ class GRUFunction(torch.autograd.Function):
         lib.gru_forward[gates.dtype](T, B, H, native.ptr(gates), *map(native.ptr, w), native.ptr(hs), native.ptr(hn), native.ptr(scratch),
                                      lib.blas[gates.dtype])
         ctx.lib = lib
-        ctx.save_for_backward(x, weight_ih, weight_hh, gates, hs, hn)
+        ctx.save_for_backward(x, weight_ih, weight_hh, bias_ih, bias_hh, gates, hs, hn)
         return hs[1:].transpose(0, 1), hs[-1].clone()
 
     @staticmethod
     def backward(ctx, d_out, d_h):  # type: ignore[override]
-        x, weight_ih, weight_hh, gates, hs, hn = ctx.saved_tensors
+        x, weight_ih, weight_hh, bias_ih, bias_hh, gates, hs, hn = ctx.saved_tensors
+        if not native.all_finite(d_out, d_h):  # the compiled loop assumes finite numbers
+            return _backward_reference(ctx.needs_input_grad, d_out, d_h, x, hs[0], weight_ih, weight_hh, bias_ih, bias_hh)
         lib = ctx.lib
         T, B, H3 = gates.shape
         H = H3 // 3
@@ -62,20 +65,48 @@ class GRUFunction(torch.autograd.Function):
         return dx, dh, d_w_ih, d_w_hh, d_b_ih, d_b_hh
 
 
+def gru_reference(x: torch.Tensor, h0: torch.Tensor, weight_ih: torch.Tensor, weight_hh: torch.Tensor,
+                  bias_ih: torch.Tensor, bias_hh: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """One GRU layer as plain PyTorch operations, nn.GRU's equations: ``x`` (B, T, D), ``h0`` (B, H) ->
+    all hidden states (B, T, H) and the last (B, H)."""
+    h, hs = h0, []
+    for x_t in x.unbind(1):
+        i_r, i_z, i_n = F.linear(x_t, weight_ih, bias_ih).chunk(3, 1)
+        h_r, h_z, h_n = F.linear(h, weight_hh, bias_hh).chunk(3, 1)
+        r, z = torch.sigmoid(i_r + h_r), torch.sigmoid(i_z + h_z)
+        h = (1 - z) * torch.tanh(i_n + r * h_n) + z * h
+        hs.append(h)
+    return torch.stack(hs, 1), h
+
+
+def _backward_reference(need: tuple[bool, ...], d_out: torch.Tensor | None, d_h: torch.Tensor | None,
+                        *inputs: torch.Tensor) -> tuple[torch.Tensor | None, ...]:
+    """:meth:`GRUFunction.backward` through :func:`gru_reference` and autograd: for incoming gradients that
+    are not finite (a diverged loss), which it propagates as PyTorch does."""
+    with torch.enable_grad():
+        leaves = [t.detach().requires_grad_(n) for t, n in zip(inputs, need)]
+        out, last = gru_reference(*leaves)
+        pairs = [(o, g) for o, g in ((out, d_out), (last, d_h)) if g is not None]
+        wanted = [t for t in leaves if t.requires_grad]
+        grads = iter(torch.autograd.grad([o for o, _ in pairs], wanted, [g for _, g in pairs], allow_unused=True))
+    return tuple(next(grads) if n else None for n in need)
+
+
 class GRU(nn.GRU):
     """``nn.GRU`` (batch-first) whose forward uses the compiled loop where it can (see the module docstring)."""
 
     def __init__(self, input_size: int, hidden_size: int, num_layers: int = 1) -> None:
         super().__init__(input_size, hidden_size, num_layers, batch_first=True)
 
-    def _compiled(self, x: torch.Tensor) -> bool:
+    def _compiled(self, x: torch.Tensor, hx: torch.Tensor | None) -> bool:
+        """Whether the compiled loop can run: CPU, float32/64, batched, plain layers, every number finite."""
         return (x.dim() == 3 and x.device.type == "cpu" and x.dtype in (torch.float32, torch.float64)
                 and self.dropout == 0 and not self.bidirectional and self.proj_size == 0
-                and native.active() is not None)
+                and native.active() is not None and native.all_finite(x, hx, *self.parameters()))
 
     def forward(self, x: torch.Tensor, hx: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:  # type: ignore[override]
         """``x`` (B, T, D), ``hx`` (L, B, H) or None -> outputs (B, T, H) and the final states (L, B, H)."""
-        if not self._compiled(x):
+        if not self._compiled(x, hx):
             return super().forward(x, hx)
         h0 = x.new_zeros(self.num_layers, x.shape[0], self.hidden_size) if hx is None else hx
         finals = []

@@ -165,11 +165,17 @@ def _small_grads(d_gates: torch.Tensor, cs: torch.Tensor) -> tuple[torch.Tensor,
             d_gates.sum((0, 1)))
 
 
-def _native_for(xw: torch.Tensor) -> native.Native | None:
-    """The compiled loop if it can run on ``xw`` (CPU, float32 or float64), else ``None``."""
+def _native_for(xw: torch.Tensor, *others: torch.Tensor | None) -> native.Native | None:
+    """The compiled loop if it can run on ``xw`` (CPU, float32 or float64) and every tensor is finite, else ``None``.
+
+    The compiled loop assumes finite numbers (it is built with ``-ffinite-math-only`` and clamps its exp):
+    a NaN or infinity goes to the PyTorch loop, which propagates it as PyTorch does, so a diverged run
+    looks diverged on either backend.
+    """
     if xw.device.type != "cpu" or xw.dtype not in (torch.float32, torch.float64):
         return None
-    return native.active()
+    lib = native.active()
+    return lib if lib is not None and native.all_finite(xw, *others) else None
 
 
 def _recurrence_native(
@@ -221,7 +227,7 @@ class PeepholeFunction(torch.autograd.Function):
     @staticmethod
     def forward(ctx, x, h0, c0, weight_ih, weight_hh, bias, w_ci, w_cf, w_co):  # type: ignore[override]
         xw = F.linear(x.transpose(0, 1), weight_ih, bias).contiguous()  # (T, B, 4H), one matmul for all t
-        lib = _native_for(xw)
+        lib = _native_for(xw, h0, c0, weight_hh, w_ci, w_cf, w_co)
         if lib is not None:
             gates, cs, hs, tcs = _recurrence_native(lib, xw, h0, c0, weight_hh, w_ci, w_cf, w_co)
         else:
@@ -236,7 +242,7 @@ class PeepholeFunction(torch.autograd.Function):
         x, weight_ih, weight_hh, w_ci, w_cf, w_co, gates, cs, hs, tcs = ctx.saved_tensors
         T, B, H4 = gates.shape
         H = H4 // 4
-        if ctx.native is not None:
+        if ctx.native is not None and native.all_finite(d_out, d_h, d_c):
             d_gates, dh, dc, small = _backward_native(ctx.native, d_out, d_h, d_c, gates, cs, tcs, weight_hh,
                                                       w_ci, w_cf, w_co)
         else:
@@ -327,6 +333,31 @@ class Classifier(nn.Module):
             self.rnn = GRU(n_inputs, hidden, layers)  # nn.GRU, on the compiled loop where it can
         self.drop = nn.Dropout(dropout)
         self.head = nn.Linear(hidden, 2)
+
+    def init_forget_gates(self, bias: float, chrono_frames: int | None = None) -> None:
+        """Start the LSTMs' forget gates open: add ``bias`` to every forget-gate bias, or, with
+        ``chrono_frames`` T, draw it as log U(1, T - 1) and set the input gate's to its negative (chrono
+        initialisation, Tallec & Ollivier 2018: memory timescales up to the input's length). The GRU has
+        no forget gate and is left as it is. Uses torch's RNG (seeded by ``study.learn.train.fit``)."""
+        if self.cell_type == "gru":
+            return
+        H = self.head.in_features
+        if isinstance(self.rnn, PeepholeStack):
+            biases = [layer.bias for layer in self.rnn.layers]
+            zeroed = [None] * len(biases)
+        else:  # nn.LSTM: two bias vectors per layer; their sum is what counts
+            biases = [getattr(self.rnn, f"bias_ih_l{k}") for k in range(self.rnn.num_layers)]
+            zeroed = [getattr(self.rnn, f"bias_hh_l{k}") for k in range(self.rnn.num_layers)]
+        with torch.no_grad():
+            for b, other in zip(biases, zeroed):
+                if chrono_frames is None:
+                    b[H : 2 * H] += bias
+                    continue
+                b_f = torch.log(torch.empty(H).uniform_(1.0, max(chrono_frames - 1.0, 1.0 + 1e-6)))
+                b[H : 2 * H] = b_f
+                b[:H] = -b_f
+                if other is not None:
+                    other[: 2 * H] = 0.0
 
     def set_scale(self, std: torch.Tensor) -> None:
         """Store the training split's per-dimension standard deviation (D,), metres."""

@@ -64,8 +64,9 @@ class Native:
     instead of corrupting memory.
     """
 
-    def __init__(self, lib: ctypes.CDLL, sgemm: int, dgemm: int) -> None:
+    def __init__(self, lib: ctypes.CDLL, sgemm: int, dgemm: int, build_id: str = "") -> None:
         self.lib = lib  # held so the library stays loaded
+        self.build_id = build_id
         for name, n_pointers in SIGNATURES.items():
             fn = getattr(lib, name)
             fn.argtypes = [ctypes.c_int] * 3 + [ctypes.c_void_p] * n_pointers
@@ -75,6 +76,11 @@ class Native:
         self.backward = {torch.float32: lib.peephole_backward_f32, torch.float64: lib.peephole_backward_f64}
         self.gru_forward = {torch.float32: lib.gru_forward_f32, torch.float64: lib.gru_forward_f64}
         self.gru_backward = {torch.float32: lib.gru_backward_f32, torch.float64: lib.gru_backward_f64}
+
+
+def all_finite(*tensors: torch.Tensor | None) -> bool:
+    """Whether every given tensor (``None`` skipped) holds only finite numbers: the compiled loops' contract."""
+    return all(t is None or bool(torch.isfinite(t).all()) for t in tensors)
 
 
 def ptr(t: torch.Tensor) -> ctypes.c_void_p:
@@ -128,11 +134,15 @@ def _blas() -> tuple[int, int] | None:
     return None
 
 
-def _build(cxx: str, version: str) -> Path:
+def _build_key(version: str) -> str:
+    """The library's identity: its sources, the compiler, the flags and this CPU (``-march=native``)."""
     source = b"\0".join(f.read_bytes() for f in FILES)
-    key = hashlib.sha256(b"\0".join([source, version.encode(), " ".join(FLAGS).encode(), _cpu().encode(),
-                                     platform.machine().encode()])).hexdigest()[:16]
-    target = cache_dir() / f"rnn-{key}.so"
+    return hashlib.sha256(b"\0".join([source, version.encode(), " ".join(FLAGS).encode(), _cpu().encode(),
+                                      platform.machine().encode()])).hexdigest()[:16]
+
+
+def _build(cxx: str, version: str) -> Path:
+    target = cache_dir() / f"rnn-{_build_key(version)}.so"
     if target.is_file():
         return target
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -159,7 +169,7 @@ def load() -> Native | None:
         warnings.warn(f"recurrent layers: using the slower PyTorch loops: {why}", RuntimeWarning, stacklevel=2)
         return None
     try:
-        return Native(ctypes.CDLL(str(_build(*compiler))), *blas)
+        return Native(ctypes.CDLL(str(_build(*compiler))), *blas, build_id=_build_key(compiler[1]))
     except (OSError, subprocess.SubprocessError) as err:
         detail = getattr(err, "stderr", "") or str(err)
         names = ", ".join(f.name for f in SOURCES)
@@ -186,6 +196,13 @@ def disabled() -> Iterator[None]:
 def active() -> Native | None:
     """The compiled kernel if it is available and not :func:`disabled`, else ``None``."""
     return None if _disabled else load()
+
+
+def build_id() -> str:
+    """The identity of the compiled library in use (sources, compiler, flags, CPU), or ``''`` on the PyTorch
+    loop: part of every training run's cache key, since another CPU's build rounds differently."""
+    lib = active()
+    return "" if lib is None else lib.build_id
 
 
 def backend() -> str:

@@ -41,6 +41,7 @@ from study.errors import ConfigError, ModelError, TrajectoryError, output_error
 from study.learn import native
 from study.learn.config import (  # re-exported: train.TrainConfig
     DIMS,
+    OLD_MEANING,
     TrainConfig,
     select_inputs,
 )
@@ -54,7 +55,10 @@ SOURCES = ("learn.config", "learn.model", "learn.gru", "learn.native", "learn.tr
 THREADS = 1
 """CPU threads used by :func:`fit` (see the module docstring)."""
 
-FORMAT = "study.model/1"
+FORMAT_1 = "study.model/1"
+FORMAT = "study.model/2"
+"""Format 2 added the training fields min_epochs, forget_bias, forget_init, clip_norm, lr_schedule and the
+record of a diverged run; a format-1 directory is read with those fields' old meaning (``OLD_MEANING``)."""
 FILES = ("weights.pt", "config.json", "normalisation.json", "history.json", "meta.json")
 """What a saved model directory holds."""
 
@@ -73,6 +77,8 @@ class TrainedModel:
     """One entry per epoch: epoch, train_loss, val_loss, val_accuracy."""
     best_epoch: int = 0
     """The epoch whose weights were kept (lowest validation loss)."""
+    diverged_epoch: int | None = None
+    """The epoch in which the training loss stopped being finite, if it did (the run then stopped there)."""
 
     @property
     def dims(self) -> str:
@@ -117,7 +123,8 @@ class TrainedModel:
             texts = {
                 "config.json": dataclasses.asdict(self.config),
                 "normalisation.json": {"dims": self.dims, "std": self.net.scale.tolist()},
-                "history.json": {"best_epoch": self.best_epoch, "epochs": self.history},
+                "history.json": {"best_epoch": self.best_epoch, "diverged_epoch": self.diverged_epoch,
+                                 "epochs": self.history},
                 "meta.json": {"format": FORMAT, "fps": self.fps, "data_key": self.data_key,
                               "n_frames": self.n_frames, "classes": list(CLASSES), "torch": torch.__version__,
                               "backend": native.backend()},
@@ -153,10 +160,16 @@ def load(model_dir: str | Path) -> TrainedModel:
         if not (d / name).is_file():
             raise ModelError(f"model directory {d} is missing {name}; {hint}")
     meta = _read_json(d / "meta.json")
-    if meta.get("format") != FORMAT:
+    if meta.get("format") not in (FORMAT_1, FORMAT):
         raise ModelError(f"model directory {d}: format {meta.get('format')!r}, expected {FORMAT!r}; {hint}")
+    fields = _read_json(d / "config.json")
+    if meta["format"] == FORMAT_1 and isinstance(fields, dict):
+        fields = {**OLD_MEANING, **fields}  # trained before these fields existed: what it was trained with
+    missing = {f.name for f in dataclasses.fields(TrainConfig)} - set(fields if isinstance(fields, dict) else ())
+    if missing:  # never fill a saved model's training with today's defaults
+        raise ModelError(f"model file {d / 'config.json'} lacks {', '.join(sorted(missing))}; {hint}")
     try:
-        cfg = TrainConfig(**_read_json(d / "config.json"))
+        cfg = TrainConfig(**fields)
         cfg.check()
     except (TypeError, ConfigError) as e:
         raise ModelError(f"model file {d / 'config.json'} is not a valid TrainConfig ({e}); {hint}") from None
@@ -174,8 +187,10 @@ def load(model_dir: str | Path) -> TrainedModel:
         raise ModelError(f"model file {d / 'normalisation.json'} disagrees with the weights; {hint}")
     hist = _read_json(d / "history.json")
     net.eval()
+    diverged = hist.get("diverged_epoch")
     return TrainedModel(net=net, config=cfg, fps=float(meta["fps"]), data_key=str(meta.get("data_key", "")),
-                        history=list(hist.get("epochs", [])), best_epoch=int(hist.get("best_epoch", 0)))
+                        history=list(hist.get("epochs", [])), best_epoch=int(hist.get("best_epoch", 0)),
+                        diverged_epoch=None if diverged is None else int(diverged))
 
 
 @contextlib.contextmanager
@@ -246,10 +261,14 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedMod
 
     with deterministic(cfg.seed):
         net = Classifier(x.shape[2], cfg.hidden, cfg.layers, cfg.dropout, cfg.cell)
+        net.init_forget_gates(cfg.forget_bias, T if cfg.forget_init == "chrono" else None)
         net.set_scale(torch.from_numpy(std).float())
         opt = torch.optim.Adam(net.parameters(), lr=cfg.lr, foreach=True)  # one kernel per update op for all tensors
+        sched = (torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=max(1, cfg.patience // 4))
+                 if cfg.lr_schedule == "plateau" else None)
         history: list[dict[str, float]] = []
         best_loss, best_epoch, best_state = math.inf, 0, copy.deepcopy(net.state_dict())
+        diverged: int | None = None
         bar = tqdm(range(cfg.max_epochs), desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
         for epoch in bar:
             net.train()
@@ -258,20 +277,32 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedMod
             for i in range(0, len(order), cfg.batch_size):
                 idx = order[i : i + cfg.batch_size]
                 loss = F.cross_entropy(last_logits(net, x_tr[idx], cfg.truncation), y_tr[idx])
+                if not math.isfinite(loss.item()):
+                    diverged = epoch  # a diverged run stops here, its last good weights kept, and says so
+                    break
                 opt.zero_grad(set_to_none=True)
                 loss.backward()
+                if cfg.clip_norm > 0:
+                    torch.nn.utils.clip_grad_norm_(net.parameters(), cfg.clip_norm, foreach=True)
                 opt.step()
                 total += loss.item() * len(idx)
+            if diverged is not None:
+                history.append({"epoch": epoch, "train_loss": math.nan, "val_loss": math.nan, "val_accuracy": math.nan})
+                break
             val_loss, val_acc = _loss_and_accuracy(net, x_va, y_va)
-            history.append({"epoch": epoch, "train_loss": total / len(y_tr), "val_loss": val_loss, "val_accuracy": val_acc})
+            history.append({"epoch": epoch, "train_loss": total / len(y_tr), "val_loss": val_loss, "val_accuracy": val_acc,
+                            "lr": opt.param_groups[0]["lr"]})
             bar.set_postfix(val_loss=f"{val_loss:.3f}", val_acc=f"{val_acc:.3f}")
+            if sched is not None:
+                sched.step(val_loss)
             if val_loss < best_loss:
                 best_loss, best_epoch, best_state = val_loss, epoch, copy.deepcopy(net.state_dict())
-            elif epoch - best_epoch >= cfg.patience:
+            elif epoch - best_epoch >= cfg.patience and epoch + 1 >= cfg.min_epochs:
                 break
         net.load_state_dict(best_state)
         net.eval()
-    return TrainedModel(net=net, config=cfg, fps=dataset.fps, data_key=dataset.key, history=history, best_epoch=best_epoch)
+    return TrainedModel(net=net, config=cfg, fps=dataset.fps, data_key=dataset.key, history=history,
+                        best_epoch=best_epoch, diverged_epoch=diverged)
 
 
 def evaluate(tm: TrainedModel, split: Split) -> dict[str, Any]:

@@ -97,7 +97,8 @@ def horizontal_distance(x: np.ndarray) -> np.ndarray:
 def best_threshold_rule(f_train: np.ndarray, y_train: np.ndarray, f_test: np.ndarray, y_test: np.ndarray) -> dict:
     """The best one-feature rule ``label = [f > t]`` or ``[f <= t]``, chosen on train, scored on test.
 
-    Returns threshold, direction ('>' predicts heavy above t, '<=' below), train and test accuracy.
+    Returns threshold, direction ('>' predicts heavy above t, '<=' below), train and test accuracy, and
+    ``correct``: (n_test,) bool, which test items the rule gets right.
     """
     f_train, f_test = np.asarray(f_train, float), np.asarray(f_test, float)
     cands = np.unique(f_train)
@@ -111,7 +112,9 @@ def best_threshold_rule(f_train: np.ndarray, y_train: np.ndarray, f_test: np.nda
                 best = (acc, float(t), direction)
     acc, t, direction = best
     pred = f_test > t if direction == ">" else f_test <= t
-    return {"threshold": t, "direction": direction, "train_accuracy": acc, "test_accuracy": float(np.mean(pred == (y_test == 1)))}
+    correct = pred == (np.asarray(y_test) == 1)
+    return {"threshold": t, "direction": direction, "train_accuracy": acc, "test_accuracy": float(np.mean(correct)),
+            "correct": correct}
 
 
 FEATURES = {
