@@ -306,3 +306,18 @@ def test_a_format_1_model_reads_with_the_old_meaning_and_a_gap_is_refused(tm, tm
     (folder / "meta.json").write_text(json.dumps(meta))  # format 2 must carry every field
     with pytest.raises(ModelError, match="lacks clip_norm, forget_bias, forget_init, lr_schedule, min_epochs"):
         train.load(folder)
+
+
+def test_randomised_observation_training_sees_other_positions_than_exact(ds):
+    cfg = dataclasses.replace(FROZEN, observe="randomised", observe_noise=0.01, observe_drop=0.1, max_epochs=1)
+    tr, va = train.split_train_val(len(ds.train.y), cfg.val_fraction, cfg.seed)
+    views, x_val = train._inputs(ds.train.x[:, :15], tr, va, cfg, ds.fps)
+    exact, _ = train._inputs(ds.train.x[:, :15], tr, va, dataclasses.replace(cfg, observe="exact"), ds.fps)
+    assert len(views) == train.OBSERVED_VIEWS and len(exact) == 1
+    assert not torch.equal(views[0], exact[0]) and not torch.equal(views[0], views[1])
+    again, _ = train._inputs(ds.train.x[:, :15], tr, va, cfg, ds.fps)
+    assert all(torch.equal(a, b) for a, b in zip(views, again)), "seeded"
+    tm = train.fit(ds, cfg, progress=False)
+    assert tm.config.observe == "randomised" and np.isfinite(tm.history[0]["val_loss"])
+    with pytest.raises(ConfigError, match="observe"):
+        train.fit(ds, dataclasses.replace(cfg, observe="blurred"), progress=False)

@@ -431,7 +431,10 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
 
 
 def _duration(seconds: float) -> str:
-    return f"{seconds:.1f} s" if seconds < 60 else f"{int(seconds // 60)} min {seconds % 60:.0f} s"
+    if seconds < 60:
+        return f"{seconds:.1f} s"
+    whole = round(seconds)
+    return f"{whole // 60} min {whole % 60} s"
 
 
 def summary(timings: dict[str, dict[str, Any]]) -> str:

@@ -96,6 +96,10 @@ class Preset:
     """Early-stopping patience of the study's first protocol (the comparison's first row), epochs."""
     first_max_epochs: int = 60
     """Epoch cap of the study's first protocol."""
+    shape_train: int = 250
+    """Training throws per class and shape in the cue chapter's mixed-shape training set."""
+    shape_test: int = 500
+    """Test throws per class and shape in the cue chapter."""
     videos_per_class: int = 20
     """Rendered videos per class in the real-world test (the paper filmed 20 + 20)."""
     real_clips: int | None = None
@@ -120,7 +124,7 @@ PRESETS: dict[str, Preset] = {
         name="smoke", length=1.0, lrs=(3e-3,), truncations=(10, 30), dropouts=(0.2,), batch_sizes=(32,),
         grid_seeds=(0, 1), seeds=(0, 1), lengths=(0.5, 1.0, 1.5), length_seeds=(0, 1), max_epochs=3,
         patience=2, min_epochs=2, long_lengths=(1.5,), protocol_seeds=(0,), first_patience=1, first_max_epochs=2,
-        videos_per_class=2, real_clips=2, render_shadows=False,
+        shape_train=4, shape_test=4, videos_per_class=2, real_clips=2, render_shadows=False,
     ),
     # The paper's scale, sized to what a 2-core CPU trains in about an hour (the closing notes measure
     # it): a 2-point grid (truncation) x 3 seeds x 3 cells; Table 1 with 5 seeds; the training protocols

@@ -130,3 +130,44 @@ def accuracy_vs_length(summary: list[dict], rows: list[dict], long_summary: list
     axes[0].set_ylabel("test accuracy (%)")
     axes[0].legend(fontsize=8, loc="lower left")
     return fig
+
+
+def robustness_curves(curves: list[dict], sweeps: dict, marks: dict, groups: list[str]) -> Figure:
+    """One panel per sweep of ``study.cues.robustness``: accuracy (mean, 95 % band) of each model group
+    against the sweep's values, a dotted line at ``marks[sweep]`` (the calibrated or exact value)."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 3, figsize=(11, 6), sharey=True)
+    colours = [OKABE_ITO["orange"], OKABE_ITO["bluish_green"], OKABE_ITO["reddish_purple"]]
+    for ax, (name, (label, _values, _make)) in zip(axes.ravel(), sweeps.items()):
+        for group, colour in zip(groups, colours):
+            pts = [r for r in curves if r["sweep"] == name and r["group"] == group]
+            v = [r["value"] for r in pts]
+            ax.fill_between(v, [100 * r["interval"].lo for r in pts], [100 * r["interval"].hi for r in pts],
+                            color=colour, alpha=0.2, linewidth=0)
+            ax.plot(v, [100 * r["interval"].value for r in pts], "o-", color=colour, label=group)
+        ax.axvline(marks[name], color="black", ls=":", lw=1)
+        ax.axhline(50, color="0.5", ls=":", lw=1)
+        ax.set(xlabel=label)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("test accuracy (%)")
+    axes[0, 0].legend(fontsize=8)
+    return fig
+
+
+def accuracy_by_parameter(curves: dict[tuple[str, str], list[dict]], names: tuple[str, ...]) -> Figure:
+    """Accuracy against each throw parameter (``study.cues.by_parameter`` rows under ``curves[(name, dims)]``),
+    one panel per parameter, a line per class and input (solid X, Y, Z; dashed Z)."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(names), figsize=(11, 3.2), sharey=True)
+    for ax, name in zip(axes, names):
+        for d, ls in (("xyz", "-"), ("z", "--")):
+            for label, cname in enumerate(CLASS_COLORS):
+                q = [r for r in curves[name, d] if r["class"] == label]
+                ax.plot([r["centre"] for r in q], [100 * r["accuracy"] for r in q], ls, marker="o", ms=3,
+                        color=CLASS_COLORS[cname], label=f"{cname}, {DIMS_NAMES[d]}")
+        ax.set(xlabel=name + (" (kg, log scale)" if name == "mass" else ""), xscale="log" if name == "mass" else "linear")
+    axes[0].set_ylabel("test accuracy (%)")
+    axes[0].legend(fontsize=7)
+    return fig

@@ -173,6 +173,21 @@ def render_set(
     return videos
 
 
+def book_set(preset_name: str, fps: float, duration: float, render_seed: int = 1000, data_dir: str | Path = "data",
+             progress: bool = False) -> tuple[list[Video], render.RenderConfig]:
+    """The rendered throws the book uses (the real-world chapter's, which the cue chapter measures the
+    tracker on): the preset's ``videos_per_class`` of each class at 320 x 240, ``fps``, ``duration``
+    seconds, with motion blur, sensor noise and JPEG loss; rendered once, then read from the cache."""
+    from study import experiments, synth
+
+    p = experiments.preset(preset_name)
+    rcfg = render.RenderConfig(width=320, height=240, fps=fps, duration=duration, blur_subframes=2, noise_std=2.0,
+                               jpeg_quality=85, shadows=p.render_shadows, seed=render_seed)
+    cfg = synth.SynthConfig.preset(preset_name)
+    videos = render_set(cfg, p.videos_per_class, render_seed, Path(data_dir) / "realworld", rcfg, progress=progress)
+    return videos, rcfg
+
+
 def track_all(videos: list[Video], progress: bool = True) -> dict[str, track.Trajectory | str]:
     """Track every video (heights in metres from its object size): file name -> trajectory, or the error message."""
     out: dict[str, track.Trajectory | str] = {}

@@ -24,6 +24,8 @@ at zero (an LSTM without peepholes on the same compiled loop: the ablation's con
 
 FORGET_INITS = ("constant", "chrono")
 """How the forget gates' biases start: all at ``forget_bias``, or chrono (Tallec & Ollivier 2018)."""
+OBSERVES = ("exact", "randomised")
+"""What a network is trained on: the simulator's positions, or positions as a random camera observes them."""
 LR_SCHEDULES = ("constant", "plateau")
 """Learning-rate schedules: fixed, or halved when the validation loss stalls for ``patience // 4`` epochs."""
 
@@ -66,6 +68,14 @@ class TrainConfig:
     lr_schedule: str = "constant"
     """'constant', or 'plateau': halve the learning rate when the validation loss has not improved for a
     quarter of ``patience`` epochs."""
+    observe: str = "exact"
+    """What the network is trained on: 'exact' positions, or 'randomised' observations (each epoch sees the
+    training split through a camera and tracker drawn at random, ``study.simulate.observe.randomised``)."""
+    observe_noise: float = 0.0
+    """The tracker's calibrated position error, metres: with ``observe='randomised'`` the validation split
+    is observed with it (and ``observe_drop``) and the random noise spans [0, 3x] it."""
+    observe_drop: float = 0.0
+    """The tracker's calibrated share of lost frames, for the validation split of a 'randomised' run."""
     val_fraction: float = 0.2
     """Share of the training split held out for early stopping (and for the grid search)."""
     seed: int = 0
@@ -89,6 +99,10 @@ class TrainConfig:
             raise ConfigError(f"TrainConfig.min_epochs = {self.min_epochs!r}; it must be a whole number >= 0")
         if self.forget_init not in FORGET_INITS:
             raise ConfigError(f"TrainConfig.forget_init = {self.forget_init!r} is unknown; use one of {FORGET_INITS}")
+        if self.observe not in OBSERVES:
+            raise ConfigError(f"TrainConfig.observe = {self.observe!r} is unknown; use one of {OBSERVES}")
+        check_range("TrainConfig.observe_noise (metres)", self.observe_noise, 0.0, 1.0)
+        check_range("TrainConfig.observe_drop", self.observe_drop, 0.0, 1.0, hi_open=True)
         if self.lr_schedule not in LR_SCHEDULES:
             raise ConfigError(f"TrainConfig.lr_schedule = {self.lr_schedule!r} is unknown; use one of {LR_SCHEDULES}")
         check_range("TrainConfig.forget_bias", self.forget_bias, -10, 10)
@@ -126,6 +140,7 @@ def select_inputs(x: np.ndarray, dims: str, n_frames: int, what: str = "trajecto
 
 
 OLD_MEANING: dict[str, object] = {"min_epochs": 0, "forget_bias": 0.0, "forget_init": "constant", "clip_norm": 0.0,
-                                  "lr_schedule": "constant"}
+                                  "lr_schedule": "constant", "observe": "exact", "observe_noise": 0.0,
+                                  "observe_drop": 0.0}
 """What the fields added with model format 2 meant before they existed: how a model saved in format 1 was
 trained (no minimum, no forget bias, no clipping, a constant learning rate)."""

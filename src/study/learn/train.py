@@ -47,6 +47,7 @@ from study.learn.config import (  # re-exported: train.TrainConfig
 )
 from study.learn.metrics import metrics
 from study.learn.model import Classifier
+from study.simulate import observe
 from study.simulate.data import Dataset, Split
 
 SOURCES = ("learn.config", "learn.model", "learn.gru", "learn.native", "learn.train",
@@ -245,6 +246,26 @@ def _loss_and_accuracy(net: Classifier, x: torch.Tensor, y: torch.Tensor, batch:
     return F.cross_entropy(logits, y).item(), (logits.argmax(1) == y).double().mean().item()
 
 
+OBSERVED_VIEWS = 8
+"""Randomised observations of the training split made once per 'randomised' run and cycled through, epoch by
+epoch (drawing a new one every epoch would cost more than the epoch)."""
+
+
+def _inputs(x: np.ndarray, tr: np.ndarray, va: np.ndarray, cfg: TrainConfig, fps: float) -> tuple[list[torch.Tensor], np.ndarray]:
+    """The training part's inputs, one view per epoch to cycle through, and the validation part's, from
+    the first frames ``x`` (n, T, 3): exact positions, or (``cfg.observe == 'randomised'``) observed ones."""
+    def inputs(a: np.ndarray) -> np.ndarray:
+        return select_inputs(a, cfg.dims, a.shape[1], what="training split")
+
+    if cfg.observe == "exact":
+        return [torch.from_numpy(inputs(x[tr]))], inputs(x[va])
+    rng = np.random.default_rng([cfg.seed, 2016])
+    ranges = observe.Randomisation(noise=(0.0, 3 * cfg.observe_noise))
+    views = [torch.from_numpy(inputs(observe.randomised(x[tr], fps, rng, ranges))) for _ in range(OBSERVED_VIEWS)]
+    calibrated = observe.Observation(noise=cfg.observe_noise, drop=cfg.observe_drop)
+    return views, inputs(calibrated.apply(x[va], fps, rng))
+
+
 def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedModel:
     """Train the classifier on ``dataset.train`` with ``cfg``; early-stop on a held-out part of it."""
     cfg.check()
@@ -254,9 +275,10 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedMod
     if len(y) < 2:
         raise TrajectoryError(f"training split has {len(y)} trajectories; need at least 2")
     tr, va = split_train_val(len(y), cfg.val_fraction, cfg.seed)
-    x_tr, y_tr = torch.from_numpy(x[tr]), torch.from_numpy(y[tr])
-    x_va, y_va = torch.from_numpy(x[va]), torch.from_numpy(y[va])
-    std = x[tr].reshape(-1, x.shape[2]).astype(np.float64).std(axis=0)  # (D,) training part only
+    views, x_val = _inputs(dataset.train.x[:, :T], tr, va, cfg, dataset.fps)
+    y_tr = torch.from_numpy(y[tr])
+    x_va, y_va = torch.from_numpy(x_val), torch.from_numpy(y[va])
+    std = views[0].numpy().reshape(-1, x.shape[2]).astype(np.float64).std(axis=0)  # (D,) training part only
     std = np.where(std > 0, std, 1.0)
 
     with deterministic(cfg.seed):
@@ -272,6 +294,7 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedMod
         bar = tqdm(range(cfg.max_epochs), desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
         for epoch in bar:
             net.train()
+            x_tr = views[epoch % len(views)]  # the same positions each epoch, or another observation of them
             order = torch.randperm(len(y_tr))
             total = 0.0
             for i in range(0, len(order), cfg.batch_size):

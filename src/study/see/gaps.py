@@ -16,35 +16,20 @@ import numpy as np
 
 from study.errors import TrackingError, check_range
 from study.see.trajectory import Trajectory
+from study.simulate.observe import fill_runs
 
 
 def fill_gaps(traj: Trajectory, max_gap: int) -> Trajectory:
     """Interpolate u, v linearly over runs of at most ``max_gap`` missing frames; split at longer runs.
 
     Filled rows get status 'filled'; the rows of each piece share a ``segment`` number; gaps at
-    the start and end of the video, and long gaps, stay missing (nothing is extrapolated).
+    the start and end of the video, and long gaps, stay missing (nothing is extrapolated). The filling
+    itself is ``study.simulate.observe.fill_runs``, which the observation model shares.
     """
-    check_range("max_gap", max_gap, 0, 10_000)
-    u, v = traj.u.copy(), traj.v.copy()
-    status = np.where(traj.status == 1, 1, 0).astype(np.int8)
-    seg = np.full(len(u), -1, np.int32)
-    idx = np.nonzero(status == 1)[0]
-    if len(idx) == 0:
-        return replace(traj, status=status, segment=seg)
-    s = 0
-    seg[idx[0]] = 0
-    for a, b in zip(idx[:-1], idx[1:]):
-        gap = b - a - 1
-        if gap > max_gap:
-            s += 1
-        elif gap > 0:
-            w = (np.arange(a + 1, b) - a) / (b - a)
-            u[a + 1 : b] = u[a] + w * (u[b] - u[a])
-            v[a + 1 : b] = v[a] + w * (v[b] - v[a])
-            status[a + 1 : b] = 2
-            seg[a + 1 : b] = s
-        seg[b] = s
-    return replace(traj, u=u, v=v, status=status, segment=seg)
+    measured = traj.status == 1
+    uv, seg = fill_runs(np.column_stack([traj.u, traj.v]), measured, max_gap)
+    status = np.where(measured, 1, np.where(seg >= 0, 2, 0)).astype(np.int8)
+    return replace(traj, u=uv[:, 0], v=uv[:, 1], status=status, segment=seg)
 
 
 def calibrate(

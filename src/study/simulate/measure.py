@@ -94,13 +94,36 @@ def horizontal_distance(x: np.ndarray) -> np.ndarray:
     return np.linalg.norm(x[..., -1, :2] - x[..., 0, :2], axis=-1)
 
 
+def fall_acceleration(z: np.ndarray, fps: float, contact_height: float) -> np.ndarray:
+    """Vertical acceleration of the first free flight, m/s^2: (n,) from heights ``z`` (n, T) metres.
+
+    The flight is every frame before the centre first comes within ``contact_height`` of the ground
+    (the shape's bounding radius: no point of the object can touch the ground before that), a parabola
+    fitted to it by least squares, its second derivative returned (about -g, less so for an object that
+    the air slows). NaN where fewer than four frames precede the first possible contact.
+    """
+    z = np.atleast_2d(np.asarray(z, dtype=float))
+    out = np.full(len(z), np.nan)
+    t = np.arange(z.shape[1]) / fps
+    for i, s in enumerate(z):
+        low = np.flatnonzero(s <= contact_height)
+        end = int(low[0]) if len(low) else len(s)
+        if end >= 4:
+            out[i] = 2 * np.polyfit(t[:end], s[:end], 2)[0]
+    return out
+
+
 def best_threshold_rule(f_train: np.ndarray, y_train: np.ndarray, f_test: np.ndarray, y_test: np.ndarray) -> dict:
     """The best one-feature rule ``label = [f > t]`` or ``[f <= t]``, chosen on train, scored on test.
+
+    A value that could not be measured (NaN) counts as the training split's median.
 
     Returns threshold, direction ('>' predicts heavy above t, '<=' below), train and test accuracy, and
     ``correct``: (n_test,) bool, which test items the rule gets right.
     """
     f_train, f_test = np.asarray(f_train, float), np.asarray(f_test, float)
+    fill = np.nanmedian(f_train) if np.isfinite(f_train).any() else 0.0  # a feature that cannot be measured
+    f_train, f_test = np.where(np.isfinite(f_train), f_train, fill), np.where(np.isfinite(f_test), f_test, fill)
     cands = np.unique(f_train)
     cands = np.concatenate([[cands[0] - 1.0], (cands[:-1] + cands[1:]) / 2, [cands[-1] + 1.0]])
     best = (-1.0, 0.0, ">")
@@ -122,12 +145,17 @@ FEATURES = {
     "time_to_rest": "time until the object stops, s",
     "distance": "distance travelled in the ground plane, m",
     "max_height_after_1s": "highest point after the first second, m",
+    "fall_acceleration": "vertical acceleration of the first fall, m/s²",
 }
 """The one-number summaries a simple rule could threshold, with their meaning and unit."""
 
 
-def features(x: np.ndarray, fps: float) -> dict[str, np.ndarray]:
-    """Each of :data:`FEATURES` for every trajectory of ``x`` (n, T, 3) metres: name -> (n,) array."""
+def features(x: np.ndarray, fps: float, contact_height: float = 0.18) -> dict[str, np.ndarray]:
+    """Each of :data:`FEATURES` for every trajectory of ``x`` (n, T, 3) metres: name -> (n,) array.
+
+    ``contact_height``: the shape's bounding radius, for :func:`fall_acceleration` (a 20 cm cube's, 0.173
+    m, rounded up).
+    """
     x = np.asarray(x, dtype=float)
     after = x[:, int(round(fps)) :, 2]
     return {
@@ -135,10 +163,13 @@ def features(x: np.ndarray, fps: float) -> dict[str, np.ndarray]:
         "time_to_rest": time_to_rest(x, fps),
         "distance": horizontal_distance(x),
         "max_height_after_1s": after.max(axis=1) if after.shape[1] else x[:, -1, 2],
+        "fall_acceleration": fall_acceleration(x[:, :, 2], fps, contact_height),
     }
 
 
-def simple_rules(x_train: np.ndarray, y_train: np.ndarray, x_test: np.ndarray, y_test: np.ndarray, fps: float) -> list[dict]:
-    """:func:`best_threshold_rule` for every feature of :data:`FEATURES`: one row per feature."""
-    f_train, f_test = features(x_train, fps), features(x_test, fps)
-    return [{"feature": name, **best_threshold_rule(f_train[name], y_train, f_test[name], y_test)} for name in FEATURES]
+def simple_rules(x_train: np.ndarray, y_train: np.ndarray, x_test: np.ndarray, y_test: np.ndarray, fps: float,
+                 contact_height: float = 0.18, names: tuple[str, ...] | None = None) -> list[dict]:
+    """:func:`best_threshold_rule` for every feature of :data:`FEATURES` (or ``names``): one row per feature."""
+    f_train, f_test = features(x_train, fps, contact_height), features(x_test, fps, contact_height)
+    return [{"feature": name, **best_threshold_rule(f_train[name], y_train, f_test[name], y_test)}
+            for name in (names or tuple(FEATURES))]

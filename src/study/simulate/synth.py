@@ -73,10 +73,14 @@ class ClassPrior:
             check_range(f"{where}.{name}[1]", hi, lo, hi_ok)
 
 
-LIGHT = ClassPrior(mass=(0.05, 0.5), restitution=(0.45, 0.85), friction=(0.3, 0.8))
-"""Light, safe to pass over: a ball, an empty plastic container."""
+LIGHT = ClassPrior(mass=(0.1, 0.6), restitution=(0.35, 0.75), friction=(0.3, 0.7))
+"""Light, safe to pass over, as a 20 cm box: an empty cardboard or plastic box, a foam block (density
+12.5-75 kg/m^3; sources in the data chapter)."""
+LIGHT_BALLS = ClassPrior(mass=(0.05, 0.5), restitution=(0.45, 0.85), friction=(0.3, 0.8))
+"""The light prior of the study's first builds, taken from balls (tennis, golf, hollow plastic): kept to
+compare Table 1 under both priors."""
 HEAVY = ClassPrior(mass=(3.0, 25.0), restitution=(0.1, 0.5), friction=(0.4, 0.7))
-"""Heavy, must avoid: a wooden block, a brick, a gas cylinder."""
+"""Heavy, must avoid: a wooden block, a brick, a gas cylinder (density 375-3125 kg/m^3 as a 20 cm box)."""
 
 
 @dataclass(frozen=True)

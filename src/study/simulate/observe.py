@@ -1,0 +1,300 @@
+"""What a camera and a tracker deliver instead of the simulator's exact positions: an observation model.
+
+The simulator records the object's centre to the micrometre at exactly 30 frames a second. A car's
+camera and a colour tracker do not (``study.see`` measures how far they do not). Each function here
+takes trajectories ``x`` (n, T, 3) metres sampled at ``fps`` and returns what the classifier would be
+given instead, in the same shape and units, seeded by the ``rng`` it is handed:
+
+- :func:`noise`: Gaussian position error of a given size (the tracker's, measured on rendered video);
+- :func:`drop`: frames the tracker loses (motion blur, occlusion), filled as the tracker fills them
+  (:func:`fill_runs`: linear interpolation over short gaps);
+- :func:`camera_rate`: another camera frame rate, resampled to the model's by linear interpolation, as
+  the tracking path (``study.see.gaps.resample``) does;
+- :func:`perspective`: the height a single camera at a distance and an angle recovers from the image
+  row, with the pixel scale taken from the object's apparent size (as ``study.see.track`` does);
+- :func:`height_scale`: an unknown error in that scale.
+
+:class:`Observation` composes them; :func:`randomised` draws one per trajectory (for training a
+classifier that expects observed positions).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from study.errors import ConfigError, TrajectoryError, check_range
+
+Z = 2
+"""Column of the height in a trajectory."""
+
+
+def _check(x: np.ndarray, what: str = "trajectories") -> np.ndarray:
+    x = np.asarray(x, dtype=np.float64)
+    if x.ndim != 3 or x.shape[2] != 3:
+        raise TrajectoryError(f"{what}: shape {x.shape}; expected (n, T, 3) world x, y, z in metres")
+    if not np.isfinite(x).all():
+        raise TrajectoryError(f"{what}: NaN or infinite positions; an observation needs finite ones")
+    return x
+
+
+def noise(x: np.ndarray, sigma: float | np.ndarray, rng: np.random.Generator, dims: tuple[int, ...] = (Z,)) -> np.ndarray:
+    """``x`` plus independent Gaussian errors of standard deviation ``sigma`` (metres; a scalar, or (n,) one
+    per trajectory) on the columns ``dims`` (the height only, by default: one camera sees a height)."""
+    x = _check(x).copy()
+    s = np.broadcast_to(np.asarray(sigma, dtype=np.float64), (len(x),))
+    if not np.isfinite(s).all() or (s < 0).any():
+        raise ConfigError(f"noise sigma = {sigma!r} m; it must be >= 0 (the tracker's error, in metres)")
+    for d in dims:
+        x[:, :, d] += rng.standard_normal(x.shape[:2]) * s[:, None]
+    return x
+
+
+def fill_runs(values: np.ndarray, measured: np.ndarray, max_gap: int) -> tuple[np.ndarray, np.ndarray]:
+    """The tracker's gap filling on one series: ``values`` (T, k) with rows where ``measured`` (T,) bool is
+    False replaced by linear interpolation between their measured neighbours, for runs of at most
+    ``max_gap`` frames; longer runs, and runs at either end, stay unfilled (nothing is invented).
+
+    Returns the filled values (T, k) and ``segment`` (T,) int: the piece each row belongs to after
+    splitting at the long gaps (-1 where still missing).
+    """
+    check_range("max_gap", max_gap, 0, 10_000)
+    values = np.array(values, dtype=np.float64, copy=True)
+    seg = np.full(len(values), -1, np.int32)
+    idx = np.flatnonzero(measured)
+    if len(idx) == 0:
+        return values, seg
+    s = 0
+    seg[idx[0]] = 0
+    for a, b in zip(idx[:-1], idx[1:]):
+        gap = b - a - 1
+        if gap > max_gap:
+            s += 1
+        elif gap > 0:
+            w = ((np.arange(a + 1, b) - a) / (b - a))[:, None]
+            values[a + 1 : b] = values[a] + w * (values[b] - values[a])
+            seg[a + 1 : b] = s
+        seg[b] = s
+    return values, seg
+
+
+def drop(x: np.ndarray, share: float | np.ndarray, rng: np.random.Generator, max_gap: int = 6) -> np.ndarray:
+    """``x`` with each frame lost with probability ``share`` (a scalar, or (n,)), refilled as the tracker
+    would: :func:`fill_runs` over gaps of up to ``max_gap`` frames. What the tracker cannot fill (a longer
+    gap, or lost frames at the start or end) holds the nearest frame it has, since the classifier needs
+    every frame; the first frame is always kept, so every trajectory starts where it was launched."""
+    x = _check(x)
+    p = np.broadcast_to(np.asarray(share, dtype=np.float64), (len(x),))
+    if not np.isfinite(p).all() or (p < 0).any() or (p >= 1).any():
+        raise ConfigError(f"drop share = {share!r}; it must lie in [0, 1) (the fraction of frames lost)")
+    out = np.empty_like(x)
+    lost = rng.random(x.shape[:2]) < p[:, None]
+    lost[:, 0] = False
+    for i in range(len(x)):
+        filled, seg = fill_runs(x[i], ~lost[i], max_gap)
+        have = np.flatnonzero(seg >= 0)
+        nearest = have[np.clip(np.searchsorted(have, np.arange(len(seg))), 0, len(have) - 1)]
+        out[i] = np.where((seg >= 0)[:, None], filled, filled[nearest])
+    return out
+
+
+def camera_rate(x: np.ndarray, fps: float, camera_fps: float, out_fps: float | None = None) -> np.ndarray:
+    """``x`` (n, T, 3) at ``fps`` as a camera at ``camera_fps`` sees it, resampled to ``out_fps`` (default
+    ``fps``) by linear interpolation, as the tracking path resamples a video to the model's rate.
+
+    The camera samples the true motion at its own frame times, so ``fps`` must be a whole multiple of
+    ``camera_fps`` (simulate at a high rate for a fast camera). Beyond the last camera frame the last
+    value is held.
+    """
+    x = _check(x)
+    check_range("camera_fps", camera_fps, 1.0, 10_000.0)
+    out_fps = fps if out_fps is None else out_fps
+    step = fps / camera_fps
+    if abs(step - round(step)) > 1e-9 or round(step) < 1:
+        raise ConfigError(f"camera_fps = {camera_fps:g}: the data's {fps:g} fps must be a whole multiple of it; "
+                          "simulate at a higher frame rate for a faster camera")
+    seen = x[:, :: int(round(step))]  # (n, Tc, 3): the camera's frames
+    t_cam = np.arange(seen.shape[1]) / camera_fps
+    t_out = np.arange(int(math.floor((x.shape[1] - 1) / fps * out_fps + 1e-9)) + 1) / out_fps
+    out = np.empty((len(x), len(t_out), 3))
+    for i in range(len(x)):
+        for d in range(3):
+            out[i, :, d] = np.interp(t_out, t_cam, seen[i, :, d])
+    return out
+
+
+CAMERAS = ("side",)
+"""Camera set-ups :class:`Camera` knows: ``'side'``, a pinhole camera looking at the throw across the road."""
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera aimed at the launch point, for :func:`perspective`."""
+
+    distance: float = 4.0
+    """Metres from the camera to the launch point (horizontally, along its view), as in the rendered videos."""
+    elevation: float = 0.0
+    """Degrees the camera looks down (0: level, at the aim height)."""
+    aim_height: float = 0.6
+    """Height the camera looks at over the launch point, metres."""
+    fovy: float = 45.0
+    """Vertical field of view, degrees."""
+    rows: int = 240
+    """Image height, pixels."""
+    kind: str = "side"
+    """One of :data:`CAMERAS`."""
+
+    def validate(self) -> None:
+        if self.kind not in CAMERAS:
+            raise ConfigError(f"Camera.kind = {self.kind!r} is unknown; use one of {', '.join(CAMERAS)}")
+        check_range("Camera.distance", self.distance, 0.5, 1000.0)
+        check_range("Camera.elevation", self.elevation, 0.0, 80.0)
+        check_range("Camera.fovy", self.fovy, 1.0, 170.0, lo_open=True)
+        check_range("Camera.rows", self.rows, 16, 100_000)
+
+
+def across_view(x: np.ndarray) -> np.ndarray:
+    """Each trajectory of ``x`` (n, T, 3) turned about the vertical through its first point so that its
+    overall horizontal travel (last point minus first) points along +x, across a camera looking along +y."""
+    x = np.array(x, dtype=np.float64, copy=True)
+    d = x[:, -1, :2] - x[:, 0, :2]
+    angle = -np.arctan2(d[:, 1], d[:, 0])  # (n,)
+    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+    rel = x[:, :, :2] - x[:, :1, :2]
+    x[:, :, 0] = x[:, :1, 0] + c * rel[:, :, 0] - s * rel[:, :, 1]
+    x[:, :, 1] = x[:, :1, 1] + s * rel[:, :, 0] + c * rel[:, :, 1]
+    return x
+
+
+def perspective(x: np.ndarray, camera: Camera, rest_height: float = 0.1) -> np.ndarray:
+    """The heights one camera and the tracker recover: (n, T, 3) with x = y = 0 (one camera gives no depth)
+    and z from the image row, as ``study.see.track`` computes it.
+
+    Each centre is projected into the camera's image; the tracker's ground row is the lowest image row
+    the object reaches (its largest v), and its scale, metres per pixel, is the object's size over its
+    apparent size at its median depth. So an object moving towards or away from the camera, or one seen
+    from above, has its height distorted as on video; ``rest_height`` is added back, as the tracker does.
+    Each throw is first turned about the vertical through its launch point so that it crosses the
+    camera's view (:func:`across_view`), as the rendered videos are filmed.
+    """
+    x = across_view(_check(x))
+    camera.validate()
+    e = math.radians(camera.elevation)
+    back = np.array([0.0, -math.cos(e), math.sin(e)])  # from the aim point towards the camera
+    aim = np.array([0.0, 0.0, camera.aim_height])
+    eye = aim + camera.distance * back
+    forward = -back
+    up = np.array([0.0, math.sin(e), math.cos(e)])  # image up, orthogonal to forward
+    rel = x - eye  # (n, T, 3)
+    depth = rel @ forward  # (n, T)
+    if (depth <= 0.05).any():
+        raise ConfigError(f"Camera.distance = {camera.distance:g} m: the object passes behind the camera; move it back")
+    f = 0.5 * camera.rows / math.tan(math.radians(camera.fovy) / 2)  # focal length, pixels
+    v = -f * (rel @ up) / depth  # (n, T) image row, down positive (offset irrelevant: a ground row is subtracted)
+    ground = v.max(axis=1, keepdims=True)
+    # metres per pixel: the object's size over its apparent size (object_size * f / depth) at its median depth
+    scale = np.median(depth, axis=1, keepdims=True) / f
+    out = np.zeros_like(x)
+    out[:, :, Z] = (ground - v) * scale + rest_height
+    return out
+
+
+def height_scale(x: np.ndarray, factor: float | np.ndarray, rest_height: float = 0.1) -> np.ndarray:
+    """Heights above the resting height multiplied by ``factor`` (a scalar or (n,)): a wrong pixel scale."""
+    x = _check(x).copy()
+    k = np.broadcast_to(np.asarray(factor, dtype=np.float64), (len(x),))
+    if not np.isfinite(k).all() or (k <= 0).any():
+        raise ConfigError(f"height scale factor = {factor!r}; it must be > 0")
+    x[:, :, Z] = rest_height + (x[:, :, Z] - rest_height) * k[:, None]
+    return x
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One way of observing a trajectory; the default observes it exactly. :meth:`apply` runs, in order:
+    the camera (its frame rate, then its perspective if ``camera`` is set), the tracker's noise, its
+    dropped frames, and a height-scale error."""
+
+    noise: float = 0.0
+    """Standard deviation of the tracker's position error, metres."""
+    drop: float = 0.0
+    """Share of frames the tracker loses, in [0, 1)."""
+    camera_fps: float | None = None
+    """Camera frame rate, frames per second; None: the data's own."""
+    camera: Camera | None = None
+    """The camera whose perspective turns image rows into heights; None: heights as simulated."""
+    scale: float = 1.0
+    """Factor on every height above the resting height (an error in the pixel scale)."""
+    max_gap: int = 6
+    """Longest gap the tracker fills, frames (``study.see.config.TrackConfig.max_gap``)."""
+
+    def validate(self) -> None:
+        check_range("Observation.noise (metres)", self.noise, 0.0, 10.0)
+        check_range("Observation.drop", self.drop, 0.0, 1.0, hi_open=True)
+        check_range("Observation.scale", self.scale, 0.0, 100.0, lo_open=True)
+        if self.camera_fps is not None:
+            check_range("Observation.camera_fps", self.camera_fps, 1.0, 10_000.0)
+        if self.camera is not None:
+            self.camera.validate()
+
+    def apply(self, x: np.ndarray, fps: float, rng: np.random.Generator, out_fps: float | None = None,
+              rest_height: float = 0.1) -> np.ndarray:
+        """``x`` (n, T, 3) metres at ``fps`` as observed: (n, T', 3) at ``out_fps`` (default ``fps``)."""
+        self.validate()
+        out_fps = fps if out_fps is None else out_fps
+        y = _check(x)
+        if self.camera_fps is not None or out_fps != fps:
+            y = camera_rate(y, fps, self.camera_fps or fps, out_fps)
+        if self.camera is not None:
+            y = perspective(y, self.camera, rest_height=rest_height)
+        if self.noise > 0:
+            y = noise(y, self.noise, rng)
+        if self.drop > 0:
+            y = drop(y, self.drop, rng, self.max_gap)
+        if self.scale != 1.0:
+            y = height_scale(y, self.scale, rest_height)
+        return y
+
+
+@dataclass(frozen=True)
+class Randomisation:
+    """Ranges from which :func:`randomised` draws each trajectory's observation (uniform unless stated)."""
+
+    noise: tuple[float, float] = (0.0, 0.03)
+    """Tracker error, metres."""
+    drop: tuple[float, float] = (0.0, 0.3)
+    """Share of frames lost."""
+    camera_fps: tuple[float, ...] = (15.0, 30.0)
+    """Camera frame rates, chosen with equal chance (no faster than the data's)."""
+    distance: tuple[float, float] = (3.0, 12.0)
+    """Camera distance, metres."""
+    elevation: tuple[float, float] = (0.0, 30.0)
+    """Camera elevation, degrees."""
+    scale: tuple[float, float] = (0.8, 1.25)
+    """Height-scale factor, log-uniform."""
+
+
+def randomised(x: np.ndarray, fps: float, rng: np.random.Generator, ranges: Randomisation = Randomisation(),
+               rest_height: float = 0.1) -> np.ndarray:
+    """Each trajectory of ``x`` through an observation drawn from ``ranges``: what a classifier is trained
+    on when it must cope with whatever camera and tracker it gets. (n, T, 3) in, (n, T, 3) out."""
+    x = _check(x)
+    out = np.empty_like(x)
+    for i in range(len(x)):
+        ob = Observation(
+            noise=float(rng.uniform(*ranges.noise)), drop=float(rng.uniform(*ranges.drop)),
+            camera_fps=float(rng.choice(ranges.camera_fps)),
+            camera=Camera(distance=float(rng.uniform(*ranges.distance)), elevation=float(rng.uniform(*ranges.elevation))),
+            scale=float(np.exp(rng.uniform(*np.log(ranges.scale)))),
+        )
+        out[i] = ob.apply(x[i : i + 1], fps, rng, rest_height=rest_height)[0]
+    return out
+
+
+def observed(ob: Observation, **changes: float) -> Observation:
+    """``ob`` with ``changes`` applied (a sweep's point), validated."""
+    new = replace(ob, **changes)
+    new.validate()
+    return new
