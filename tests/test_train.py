@@ -321,3 +321,18 @@ def test_randomised_observation_training_sees_other_positions_than_exact(ds):
     assert tm.config.observe == "randomised" and np.isfinite(tm.history[0]["val_loss"])
     with pytest.raises(ConfigError, match="observe"):
         train.fit(ds, dataclasses.replace(cfg, observe="blurred"), progress=False)
+
+
+def test_a_network_trained_at_every_frame_answers_at_every_frame_and_streams(ds):
+    from study.learn.stream import Streamer
+
+    cfg = dataclasses.replace(TINY, dims="z", loss_at="every", max_epochs=2)
+    tm = train.fit(ds, cfg, progress=False)
+    frames = tm.predict_proba_frames(ds.test.x)
+    assert frames.shape == (len(ds.test.y), tm.n_frames, 2)
+    np.testing.assert_allclose(frames[:, -1], tm.predict_proba(ds.test.x), atol=1e-6)  # the last frame is the answer
+    s = Streamer(tm.net)
+    streamed = np.array([s.push(z) for z in ds.test.x[0, : tm.n_frames, 2:]])
+    np.testing.assert_allclose(streamed, frames[0], atol=1e-5)  # what a car would run, frame by frame
+    with pytest.raises(ConfigError, match="loss_at"):
+        train.fit(ds, dataclasses.replace(cfg, loss_at="first"), progress=False)

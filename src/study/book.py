@@ -141,6 +141,12 @@ def _read_notebook(path: Path) -> Any:
     return jupytext.read(path, fmt="md:myst")
 
 
+def _runs_last(nb: Any) -> bool:
+    """A chapter whose front matter says ``study: {execute: last}`` runs after every other chapter (wherever
+    the table of contents places it), once the results file holds their numbers."""
+    return (nb.metadata.get("study") or {}).get("execute") == "last"
+
+
 def _is_notebook(nb: Any) -> bool:
     """A page with a kernelspec in its header is executed; a plain markdown page is copied."""
     return "kernelspec" in nb.metadata
@@ -367,7 +373,9 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
 
     ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, keeping the others'
     current copies, but a chapter that has no executed copy at all is always executed. Stops at the
-    first failing chapter with :class:`ChapterError`. Also writes ``_build/executed/timings.json``.
+    first failing chapter with :class:`ChapterError`. Also writes ``_build/executed/timings.json`` and merges
+    the chapters' numbers into ``_build/results.json`` (:mod:`study.results`): before the chapters that run
+    last (:func:`_runs_last`, such as a summary that reads them) and again at the end.
     """
     import nbformat
 
@@ -381,11 +389,16 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     package = source_hash()
     timings: dict[str, dict[str, Any]] = {}
     done: list[tuple[Chapter, dict[str, Any], dict[str, Any], float]] = []
+    sources = {ch.stem: _read_notebook(ch.source) for ch in chs}
+    last = [ch for ch in chs if _runs_last(sources[ch.stem])]  # they read what the others wrote
+    order = [ch for ch in chs if ch not in last] + last
     try:
         with tempfile.TemporaryDirectory(prefix="study-book-") as tmp:
-            for n, ch in enumerate(chs, 1):
+            for n, ch in enumerate(order, 1):
                 where = f"[{n}/{len(chs)}] {ch.stem}"
-                nb = _read_notebook(ch.source)
+                nb = sources[ch.stem]
+                if ch is (last[0] if last else None):  # the results of every other chapter, merged for it
+                    results.merge([c.results_part for c in chs], root / results.FILE, preset)
                 if not _is_notebook(nb):  # a plain page: placed, never executed
                     _copy_if_changed(ch.source, root / EXECUTED / f"{ch.entry}.md")
                     timings[ch.stem] = {"seconds": 0.0, "cached": True, "page": True}

@@ -126,7 +126,7 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_train(sub: argparse._SubParsersAction) -> None:
-    from study.learn.config import CELLS, DIMS, FORGET_INITS, LR_SCHEDULES, OBSERVES, TrainConfig  # no torch
+    from study.learn.config import CELLS, DIMS, FORGET_INITS, LOSSES, LR_SCHEDULES, OBSERVES, TrainConfig  # no torch
 
     p = sub.add_parser(
         "train",
@@ -145,7 +145,8 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--length", type=float, required=True, metavar="SECONDS", help=_plain(field_docs(TrainConfig)["length"]))
     _add_fields(p, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig) if f.name not in ("dims", "length")],
                 flags={"max_epochs": "--epochs"},
-                choices={"cell": CELLS, "forget_init": FORGET_INITS, "lr_schedule": LR_SCHEDULES, "observe": OBSERVES})
+                choices={"cell": CELLS, "forget_init": FORGET_INITS, "lr_schedule": LR_SCHEDULES, "observe": OBSERVES,
+                         "loss_at": LOSSES})
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:

@@ -6,8 +6,7 @@ ask which of those cues a classifier uses, with Table 1's protocol and configura
 
 - :func:`observation_calibration`: the tracker's error on rendered video, the size of the observation
   model's noise (``study.simulate.observe``);
-- :func:`air_off_dataset`, :func:`train_runs`: the same throws without drag, and Table 1's runs on them;
-- :func:`scored`: a set of trained models scored on (observed) test trajectories, for intervals;
+- :func:`air_off_dataset`: the same throws without drag (Table 1's runs on them: ``experiments.train_runs``);
 - :func:`rules`: the one-feature rules on the first T seconds the networks see;
 - :func:`ceiling`: what a classifier given each throw's true restitution and friction (and mass) reaches;
 - :func:`robustness`: accuracy against each parameter of the observation model;
@@ -29,10 +28,9 @@ from study import cache, experiments, realworld
 from study.learn import baseline
 from study.learn.metrics import Interval, bootstrap_accuracy
 from study.learn.train import TrainConfig
+from study.see import render, track
 from study.simulate import data, measure, observe, synth
 from study.simulate.scene import Shape
-from study.see import render, track
-
 
 # ---------------------------------------------------------------------------------------------
 # The observation model's size, from the tracker on rendered video
@@ -73,30 +71,6 @@ def air_off_dataset(preset: str, seed: int, data_dir: str | Path = "data") -> da
     """The paper-scale dataset of ``seed`` with the air removed: the same objects and launches (the random
     streams do not depend on ``air``), no drag and no added mass."""
     return synth.dataset(synth.SynthConfig.preset(preset).replace(air=False), seed, data_dir=data_dir, progress=False)
-
-
-def train_runs(dataset: data.Dataset, cfg: TrainConfig, dims: Sequence[str], seeds: Sequence[int],
-               data_dir: str | Path = "data", desc: str = "runs", progress: bool = False,
-               workers: int | None = None, **changes: Any) -> list[dict]:
-    """``cfg`` (with ``changes``) for each of ``dims`` and ``seeds`` on ``dataset``, scored on its test split:
-    one row per (dims, seed), as ``study.experiments.seed_runs`` gives them."""
-    cfgs = [dataclasses.replace(cfg, dims=d, seed=s, **changes) for d in dims for s in seeds]
-    recs = experiments._runs(dataset, cfgs, data_dir, True, desc, progress, workers)
-    return [experiments._row(r, dataset, "dims") for r in recs]
-
-
-def trained(dataset: data.Dataset, cfg: TrainConfig, data_dir: str | Path = "data"):
-    """The kept model of a run :func:`train_runs` (or any experiment) trained: ``study.learn.train.load``."""
-    from study.learn import train
-
-    return train.load(experiments.model_dir(dataset, cfg, data_dir))
-
-
-def scored(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> Interval:
-    """The mean accuracy of ``models`` on trajectories ``x`` (n, T, 3) with labels ``y``, and its bootstrap
-    interval over the trajectories and the models (seeds)."""
-    correct = np.stack([m.predict_proba(x).argmax(axis=1) == np.asarray(y) for m in models])
-    return bootstrap_accuracy(correct)
 
 
 def observed(x: np.ndarray, fps: float, ob: observe.Observation, seed: int = 0, out_frames: int | None = None,
@@ -160,7 +134,7 @@ def robustness(models: dict[str, Sequence[Any]], x: np.ndarray, y: np.ndarray, f
             xo = xo[:, :frames]
             for group, ms in models.items():
                 rows.append({"sweep": name, "label": label, "value": value, "group": group,
-                             "interval": scored(ms, xo, y)})
+                             "interval": experiments.scored(ms, xo, y)})
     return rows
 
 
@@ -258,12 +232,12 @@ def recommended(dataset: data.Dataset, cfg: TrainConfig, calibration: dict[str, 
     configs = {"faithful": z, "randomised": randomised_config(z, calibration)}
     for c in configs.values():
         experiments.run(dataset, c, data_dir, test=False)
-    models = {k: trained(dataset, c, data_dir) for k, c in configs.items()}
+    models = {k: experiments.trained(dataset, c, data_dir) for k, c in configs.items()}
     _, va = train.split_train_val(len(dataset.train.y), cfg.val_fraction, seed)
     T = cfg.n_frames(dataset.fps)
     ob = observe.Observation(noise=calibration["noise_m"], drop=calibration["drop"])
     x_val = observed(dataset.train.x[va, :T], dataset.fps, ob, seed=6)
-    val = {k: scored([m], x_val, dataset.train.y[va]) for k, m in models.items()}
+    val = {k: experiments.scored([m], x_val, dataset.train.y[va]) for k, m in models.items()}
     choice = max(val, key=lambda k: val[k].value)
     return choice, val, models[choice]
 

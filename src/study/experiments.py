@@ -32,6 +32,7 @@ import json
 import multiprocessing
 import os
 import time
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
@@ -100,6 +101,9 @@ class Preset:
     """Training throws per class and shape in the cue chapter's mixed-shape training set."""
     shape_test: int = 500
     """Test throws per class and shape in the cue chapter."""
+    calibration_per_class: int = 2500
+    """Throws per class in the decision chapter's calibration split (simulated for it alone: a 1 % miss
+    rate is then 25 heavy objects, not 4)."""
     videos_per_class: int = 20
     """Rendered videos per class in the real-world test (the paper filmed 20 + 20)."""
     real_clips: int | None = None
@@ -124,7 +128,8 @@ PRESETS: dict[str, Preset] = {
         name="smoke", length=1.0, lrs=(3e-3,), truncations=(10, 30), dropouts=(0.2,), batch_sizes=(32,),
         grid_seeds=(0, 1), seeds=(0, 1), lengths=(0.5, 1.0, 1.5), length_seeds=(0, 1), max_epochs=3,
         patience=2, min_epochs=2, long_lengths=(1.5,), protocol_seeds=(0,), first_patience=1, first_max_epochs=2,
-        shape_train=4, shape_test=4, videos_per_class=2, real_clips=2, render_shadows=False,
+        shape_train=4, shape_test=4, calibration_per_class=8, videos_per_class=2, real_clips=2,
+        render_shadows=False,
     ),
     # The paper's scale, sized to what a 2-core CPU trains in about an hour (the closing notes measure
     # it): a 2-point grid (truncation) x 3 seeds x 3 cells; Table 1 with 5 seeds; the training protocols
@@ -430,6 +435,28 @@ def baseline_runs(dataset: Dataset, p: Preset) -> list[dict]:
                      **{f"accuracy_{c}": a for c, a in res["per_class_accuracy"].items()},
                      "coefficients": m.coefficients})
     return rows
+
+
+def train_runs(dataset: Dataset, cfg: TrainConfig, dims: Sequence[str], seeds: Sequence[int],
+               data_dir: str | Path = "data", desc: str = "runs", progress: bool = False,
+               workers: int | None = None, **changes: Any) -> list[dict]:
+    """``cfg`` (with ``changes``) for each of ``dims`` and ``seeds`` on ``dataset``, scored on its test split:
+    one row per (dims, seed), as ``study.experiments.seed_runs`` gives them."""
+    cfgs = [dataclasses.replace(cfg, dims=d, seed=s, **changes) for d in dims for s in seeds]
+    recs = _runs(dataset, cfgs, data_dir, True, desc, progress, workers)
+    return [_row(r, dataset, "dims") for r in recs]
+
+
+def trained(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path = "data"):
+    """The kept model of a run :func:`train_runs` (or any experiment) trained: ``study.learn.train.load``."""
+    return train.load(model_dir(dataset, cfg, data_dir))
+
+
+def scored(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> Interval:
+    """The mean accuracy of ``models`` on trajectories ``x`` (n, T, 3) with labels ``y``, and its bootstrap
+    interval over the trajectories and the models (seeds)."""
+    correct = np.stack([m.predict_proba(x).argmax(axis=1) == np.asarray(y) for m in models])
+    return bootstrap_accuracy(correct)
 
 
 # ---------------------------------------------------------------------------------------------

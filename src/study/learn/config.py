@@ -24,6 +24,8 @@ at zero (an LSTM without peepholes on the same compiled loop: the ablation's con
 
 FORGET_INITS = ("constant", "chrono")
 """How the forget gates' biases start: all at ``forget_bias``, or chrono (Tallec & Ollivier 2018)."""
+LOSSES = ("last", "every")
+"""Where the loss is taken: at the last frame only (the paper's), or at every frame."""
 OBSERVES = ("exact", "randomised")
 """What a network is trained on: the simulator's positions, or positions as a random camera observes them."""
 LR_SCHEDULES = ("constant", "plateau")
@@ -68,6 +70,10 @@ class TrainConfig:
     lr_schedule: str = "constant"
     """'constant', or 'plateau': halve the learning rate when the validation loss has not improved for a
     quarter of ``patience`` epochs."""
+    loss_at: str = "last"
+    """'last': the loss is the answer's at the last frame (the paper's network); 'every': the mean of the
+    answers' at every frame, so the network answers at every frame (back-propagation then runs through
+    the whole input; ``truncation`` is not used; early stopping still scores the answer at the last frame)."""
     observe: str = "exact"
     """What the network is trained on: 'exact' positions, or 'randomised' observations (each epoch sees the
     training split through a camera and tracker drawn at random, ``study.simulate.observe.randomised``)."""
@@ -99,6 +105,8 @@ class TrainConfig:
             raise ConfigError(f"TrainConfig.min_epochs = {self.min_epochs!r}; it must be a whole number >= 0")
         if self.forget_init not in FORGET_INITS:
             raise ConfigError(f"TrainConfig.forget_init = {self.forget_init!r} is unknown; use one of {FORGET_INITS}")
+        if self.loss_at not in LOSSES:
+            raise ConfigError(f"TrainConfig.loss_at = {self.loss_at!r} is unknown; use one of {LOSSES}")
         if self.observe not in OBSERVES:
             raise ConfigError(f"TrainConfig.observe = {self.observe!r} is unknown; use one of {OBSERVES}")
         check_range("TrainConfig.observe_noise (metres)", self.observe_noise, 0.0, 1.0)
@@ -140,7 +148,7 @@ def select_inputs(x: np.ndarray, dims: str, n_frames: int, what: str = "trajecto
 
 
 OLD_MEANING: dict[str, object] = {"min_epochs": 0, "forget_bias": 0.0, "forget_init": "constant", "clip_norm": 0.0,
-                                  "lr_schedule": "constant", "observe": "exact", "observe_noise": 0.0,
+                                  "lr_schedule": "constant", "loss_at": "last", "observe": "exact", "observe_noise": 0.0,
                                   "observe_drop": 0.0}
 """What the fields added with model format 2 meant before they existed: how a model saved in format 1 was
 trained (no minimum, no forget bias, no clipping, a constant learning rate)."""

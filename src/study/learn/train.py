@@ -97,6 +97,16 @@ class TrainedModel:
         return float(self.history[self.best_epoch]["val_accuracy"]) if self.history else math.nan
 
     @torch.no_grad()
+    def predict_proba_frames(self, x: np.ndarray, batch: int = 512) -> np.ndarray:
+        """``x`` (n, T, 3) metres -> (n, n_frames, 2) float64: the answer after every frame of the input (the
+        network's state then; trained to answer there only when ``config.loss_at == 'every'``)."""
+        xs = torch.from_numpy(select_inputs(x, self.dims, self.n_frames))
+        self.net.eval()
+        with num_threads(THREADS):
+            out = [F.softmax(frame_logits(self.net, xs[i : i + batch]), dim=-1) for i in range(0, len(xs), batch)]
+        return torch.cat(out).double().numpy() if out else np.zeros((0, self.n_frames, 2))
+
+    @torch.no_grad()
     def predict_proba(self, x: np.ndarray, batch: int = 1024) -> np.ndarray:
         """``x`` (n, T, 3) float32 metres, world (x, y, z), T >= ``n_frames`` -> (n, 2) float64 [p_light, p_heavy].
 
@@ -232,6 +242,20 @@ def last_logits(net: Classifier, x: torch.Tensor, truncation: int) -> torch.Tens
     return net.logits(hs[:, -1])
 
 
+def frame_logits(net: Classifier, x: torch.Tensor) -> torch.Tensor:
+    """Logits (B, T, 2) at every frame of ``x`` (B, T, D), gradients through the whole input."""
+    hs, _ = net.encode(x)  # (B, T, H)
+    return net.logits(hs)
+
+
+def _loss(net: Classifier, x: torch.Tensor, y: torch.Tensor, cfg: TrainConfig) -> torch.Tensor:
+    """The training loss of a batch: cross-entropy at the last frame, or the mean over every frame."""
+    if cfg.loss_at == "every":
+        logits = frame_logits(net, x)  # (B, T, 2)
+        return F.cross_entropy(logits.reshape(-1, 2), y.repeat_interleave(x.shape[1]))
+    return F.cross_entropy(last_logits(net, x, cfg.truncation), y)
+
+
 def split_train_val(n: int, val_fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """Indices (train, val) of a seeded permutation of ``range(n)``; at least one in each."""
     perm = np.random.default_rng(seed).permutation(n)
@@ -299,7 +323,7 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedMod
             total = 0.0
             for i in range(0, len(order), cfg.batch_size):
                 idx = order[i : i + cfg.batch_size]
-                loss = F.cross_entropy(last_logits(net, x_tr[idx], cfg.truncation), y_tr[idx])
+                loss = _loss(net, x_tr[idx], y_tr[idx], cfg)
                 if not math.isfinite(loss.item()):
                     diverged = epoch  # a diverged run stops here, its last good weights kept, and says so
                     break
