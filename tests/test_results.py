@@ -97,3 +97,30 @@ def test_bad_results_files(tmp_path, capsys):
     (tmp_path / "other.json").write_text(json.dumps({"format": "something/1"}))
     assert cli.main(["results", str(tmp_path / "other.json")]) == 2
     assert "not a study.results/1 file" in capsys.readouterr().err
+
+
+@pytest.mark.slow  # trains the smoke Table 1 on the PyTorch loop
+def test_rebuild_check_writes_table1_on_the_other_backend(tmp_path, monkeypatch):
+    import dataclasses
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from study import experiments
+
+    cfg = experiments.preset("smoke").base_config()
+    part = tmp_path / "part.json"
+    monkeypatch.setenv(results.ENV, str(part))
+    r = results.Results("table1")
+    r.add("z.mean", Interval(0.6, 0.5, 0.7, "x"), config=dataclasses.asdict(cfg))
+    r.save()
+    results.merge([part], tmp_path / "build.json", "smoke")
+    script = Path(__file__).resolve().parents[1] / "scripts" / "rebuild_check.py"
+    proc = subprocess.run([sys.executable, str(script), "--results", str(tmp_path / "build.json"), "--backend", "torch",
+                           "--preset", "smoke", "--data-dir", str(tmp_path / "data"), "--workers", "1",
+                           "--out", str(tmp_path / "torch.json")], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    again = results.load(tmp_path / "torch.json")
+    assert {"table1.z.mean", "table1.xyz.mean", "table1.z.best", "table1.xyz.best"} <= set(again)
+    metas = [json.loads(f.read_text()) for f in (tmp_path / "data" / "models").glob("*/meta.json")]
+    assert len(metas) == 4 and {m["backend"] for m in metas} == {"torch"}, "trained on the PyTorch loop"

@@ -1,0 +1,68 @@
+"""Does a rebuild agree? Table 1 trained again on another time loop or another data seed, as a results file.
+
+The book's Table 1 comes from one machine, one time loop (the compiled one, where a compiler exists)
+and one data seed. This script trains Table 1's runs again at the same configuration (read from a
+build's results file) with the PyTorch time loop instead of the compiled one (``--backend torch``), or
+on a dataset simulated from another seed (``--data-seed 1``), and writes the same numbers under the
+same names. Then
+
+    study results _build/results.json --compare table1-torch.json
+
+lists the numbers that moved outside each other's 95 % intervals.
+
+    python scripts/rebuild_check.py --results _build/results.json --backend torch --out table1-torch.json
+    python scripts/rebuild_check.py --results _build/results.json --data-seed 1 --out table1-seed1.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--results", type=Path, default=Path("_build/results.json"), help="the build whose Table 1 to redo")
+    ap.add_argument("--backend", choices=("native", "torch"), default="native", help="time loop of the new runs")
+    ap.add_argument("--data-seed", type=int, default=0, help="seed of the dataset the new runs train on")
+    ap.add_argument("--preset", default="paper")
+    ap.add_argument("--data-dir", type=Path, default=Path("data"))
+    ap.add_argument("--workers", type=int, default=0, help="training processes (0: one per CPU)")
+    ap.add_argument("--out", type=Path, required=True, help="results file to write")
+    a = ap.parse_args(argv)
+    if a.backend == "torch":
+        os.environ["STUDY_NATIVE"] = "0"  # before study.learn.native is imported, here and in the workers
+
+    import dataclasses
+
+    from study import experiments, results
+    from study.learn.train import TrainConfig
+    from study.simulate import synth
+
+    source = results.load(a.results)["table1.z.mean"].source
+    cfg = TrainConfig(**source["config"])
+    p = experiments.preset(a.preset)
+    ds = synth.dataset(a.preset, seed=a.data_seed, data_dir=a.data_dir)
+    rows = experiments.seed_runs(ds, cfg, p, a.data_dir, progress=True, workers=a.workers or None)
+    with tempfile.TemporaryDirectory() as tmp:
+        part = Path(tmp) / "table1.json"
+        os.environ[results.ENV] = str(part)
+        res = results.Results("table1")
+        for d, s in ((r["dims"], r) for r in experiments.summarise(rows, ("dims",))):
+            best, best_iv = experiments.best_run_interval([r for r in rows if r["dims"] == d])
+            res.add(f"{d}.best", best_iv, what=f"best seed, {d}", seed=best["seed"])
+            res.add(f"{d}.mean", s["interval"], what=f"mean over seeds, {d}", config=dataclasses.asdict(cfg))
+            res.add(f"{d}.failed", s["failed"], unit="count", what="seeds that failed to train")
+        res.save()
+        results.merge([part], a.out, f"{a.preset} (backend {a.backend}, data seed {a.data_seed})")
+    for n in results.load(a.out).values():
+        print(f"{n.name}: {results.fmt(n)}")
+    print(f"written: {a.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
