@@ -4,7 +4,8 @@ The book's Table 1 comes from one machine, one time loop (the compiled one, wher
 and one data seed. This script trains Table 1's runs again at the same configuration (read from a
 build's results file) with the PyTorch time loop instead of the compiled one (``--backend torch``), or
 on a dataset simulated from another seed (``--data-seed 1``), and writes the same numbers under the
-same names. Then
+same names. With ``--light-priors balls`` it trains them on the study's first light prior (balls'
+masses and restitutions, ``study.simulate.synth.LIGHT_BALLS``) instead of the box-like one. Then
 
     study results _build/results.json --compare table1-torch.json
 
@@ -12,6 +13,7 @@ lists the numbers that moved outside each other's 95 % intervals.
 
     python scripts/rebuild_check.py --results _build/results.json --backend torch --out table1-torch.json
     python scripts/rebuild_check.py --results _build/results.json --data-seed 1 --out table1-seed1.json
+    python scripts/rebuild_check.py --results _build/results.json --light-priors balls --out table1-balls.json
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--results", type=Path, default=Path("_build/results.json"), help="the build whose Table 1 to redo")
     ap.add_argument("--backend", choices=("native", "torch"), default="native", help="time loop of the new runs")
     ap.add_argument("--data-seed", type=int, default=0, help="seed of the dataset the new runs train on")
+    ap.add_argument("--light-priors", choices=("box", "balls"), default="box", help="the light class's priors")
     ap.add_argument("--preset", default="paper")
     ap.add_argument("--data-dir", type=Path, default=Path("data"))
     ap.add_argument("--workers", type=int, default=0, help="training processes (0: one per CPU)")
@@ -45,7 +48,10 @@ def main(argv: list[str] | None = None) -> int:
     source = results.load(a.results)["table1.z.mean"].source
     cfg = TrainConfig(**source["config"])
     p = experiments.preset(a.preset)
-    ds = synth.dataset(a.preset, seed=a.data_seed, data_dir=a.data_dir)
+    synth_cfg = synth.SynthConfig.preset(a.preset)
+    if a.light_priors == "balls":
+        synth_cfg = synth_cfg.replace(light=synth.LIGHT_BALLS)
+    ds = synth.dataset(synth_cfg, seed=a.data_seed, data_dir=a.data_dir)
     rows = experiments.seed_runs(ds, cfg, p, a.data_dir, progress=True, workers=a.workers or None)
     with tempfile.TemporaryDirectory() as tmp:
         part = Path(tmp) / "table1.json"
@@ -57,7 +63,8 @@ def main(argv: list[str] | None = None) -> int:
             res.add(f"{d}.mean", s["interval"], what=f"mean over seeds, {d}", config=dataclasses.asdict(cfg))
             res.add(f"{d}.failed", s["failed"], unit="count", what="seeds that failed to train")
         res.save()
-        results.merge([part], a.out, f"{a.preset} (backend {a.backend}, data seed {a.data_seed})")
+        results.merge([part], a.out, f"{a.preset} (backend {a.backend}, data seed {a.data_seed}, "
+                                     f"light priors {a.light_priors})")
     for n in results.load(a.out).values():
         print(f"{n.name}: {results.fmt(n)}")
     print(f"written: {a.out}", file=sys.stderr)
