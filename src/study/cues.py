@@ -92,6 +92,24 @@ def rules(train_x: np.ndarray, train_y: np.ndarray, test_x: np.ndarray, test_y: 
     return [r | {"interval": bootstrap_accuracy(r["correct"])} for r in rows]
 
 
+def window_cues(dataset: data.Dataset, lengths: Sequence[float], contact_height: float) -> list[dict]:
+    """What the first T seconds of each test throw hold, for each T (s) of ``lengths``: the share whose first
+    fall has ended inside the window (``landed``), the drag rule's test accuracy on the window (``drag``)
+    and the best other one-feature rule's (``other``, named by ``other_feature``), intervals over test throws."""
+    rows = []
+    for length in lengths:
+        n = round(length * dataset.fps)
+        xte = dataset.test.x[:, :n]
+        ends = [measure.first_contact(z) for z in xte[..., 2]]
+        by = {r["feature"]: r for r in rules(dataset.train.x[:, :n], dataset.train.y, xte, dataset.test.y,
+                                             dataset.fps, contact_height)}
+        drag = by.pop("fall_acceleration")
+        other = max(by.values(), key=lambda r: r["test_accuracy"])
+        rows.append({"length": float(length), "landed": float(np.mean([e is not None for e in ends])),
+                     "drag": drag["interval"], "other": other["interval"], "other_feature": other["feature"]})
+    return rows
+
+
 def ceiling(dataset: data.Dataset, with_mass: bool = False) -> Interval:
     """The accuracy the priors allow a classifier that is told each throw's true restitution and friction
     (and, with ``with_mass``, its log mass): a logistic regression on them, fitted on the training
