@@ -188,10 +188,14 @@ def _scale(unit: str) -> tuple[float, str]:
     return (100.0, " %") if unit == "fraction" else (1.0, "" if unit == "count" else f" {unit}")
 
 
+def _spec(unit: str) -> str:
+    return ".1f" if unit == "fraction" else ".3g"  # percentages to a tenth of a point, as in the chapters
+
+
 def fmt_value(value: float, unit: str = "fraction") -> str:
     """``'81.2 %'`` for a fraction, ``'12'`` for a count, ``'0.41 s'`` otherwise."""
     scale, suffix = _scale(unit)
-    return f"{scale * value:.3g}{suffix}"
+    return f"{scale * value:{_spec(unit)}}{suffix}"
 
 
 def fmt(n: Number) -> str:
@@ -201,4 +205,4 @@ def fmt(n: Number) -> str:
     if n.lo == n.hi == n.value:
         return fmt_value(n.value, n.unit)
     scale, _ = _scale(n.unit)
-    return f"{fmt_value(n.value, n.unit)} [{scale * n.lo:.3g}, {scale * n.hi:.3g}]"
+    return f"{fmt_value(n.value, n.unit)} [{scale * n.lo:{_spec(n.unit)}}, {scale * n.hi:{_spec(n.unit)}}]"
