@@ -78,7 +78,7 @@ def test_results_file_round_trip_and_compare(tmp_path, monkeypatch, capsys):
     assert "MOVED table1.z" in out and "table1.xyz" not in out
     assert "1 of 2 shared numbers moved" in out
     assert cli.main(["results", str(a)]) == 0
-    assert "table1.xyz: 80 % [78, 82]  paper 81 %  reproduced" in capsys.readouterr().out
+    assert "table1.xyz: 80.0 % [78.0, 82.0]  paper 81.0 %  reproduced" in capsys.readouterr().out
 
 
 def test_results_outside_the_builder_write_nothing(monkeypatch):
@@ -124,3 +124,10 @@ def test_rebuild_check_writes_table1_on_the_other_backend(tmp_path, monkeypatch)
     assert {"table1.z.mean", "table1.xyz.mean", "table1.z.best", "table1.xyz.best"} <= set(again)
     metas = [json.loads(f.read_text()) for f in (tmp_path / "data" / "models").glob("*/meta.json")]
     assert len(metas) == 4 and {m["backend"] for m in metas} == {"torch"}, "trained on the PyTorch loop"
+
+
+def test_numbers_print_as_the_chapters_print_them():
+    n = results.Number("decision.exact.miss", 0.013, 0.00761, 0.0221, "Wilson", "decision")
+    assert results.fmt(n) == "1.3 % [0.8, 2.2]"  # percentages to a tenth of a point, not 3 digits
+    assert results.fmt(results.Number("x.count", 14, 14, 14, "count", "table1", unit="count")) == "14"
+    assert results.fmt_value(0.0141, "m") == "0.0141 m"
