@@ -131,10 +131,10 @@ PRESETS: dict[str, Preset] = {
         shape_train=4, shape_test=4, calibration_per_class=8, videos_per_class=2, real_clips=2,
         render_shadows=False,
     ),
-    # The paper's scale, sized to what a 2-core CPU trains in a couple of hours (the closing notes measure
-    # it): a 2 x 2 grid (learning rate x truncation) x 3 seeds x 3 cells; Table 1 with 5 seeds; the training
-    # protocols with 2; the length sweep with 2 seeds; the long-memory test at 6 s. A run converges in
-    # 40-150 epochs of about 1.2 s at 3 s of input (batch 32, two runs at a time).
+    # The paper's scale, 74 minutes from an empty data/ on a 2-core CPU (measured at cc15304): a 2 x 2
+    # grid (learning rate x truncation) x 3 seeds x 3 cells; Table 1 with 5 seeds; the training protocols
+    # with 2; the length sweep with 2 seeds; the long-memory test at 6 s. A run converges in 40-150
+    # epochs of about 1.2 s at 3 s of input (batch 32, two runs at a time).
     "paper": Preset(
         name="paper", length=3.0, lrs=(1e-3, 3e-3), truncations=(30, 90), dropouts=(0.2,), batch_sizes=(32,),
         grid_seeds=(0, 1, 2), seeds=(0, 1, 2, 3, 4), lengths=(0.5, 1.0, 2.0, 3.0, 6.0), length_seeds=(0, 1),

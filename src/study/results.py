@@ -184,18 +184,17 @@ def compare(a: dict[str, Number], b: dict[str, Number]) -> tuple[list[Moved], li
     return pairs, sorted(set(a) - set(b)), sorted(set(b) - set(a))
 
 
-def _scale(unit: str) -> tuple[float, str]:
-    return (100.0, " %") if unit == "fraction" else (1.0, "" if unit == "count" else f" {unit}")
-
-
-def _spec(unit: str) -> str:
-    return ".1f" if unit == "fraction" else ".3g"  # percentages to a tenth of a point, as in the chapters
+def _scale(unit: str) -> tuple[float, str, str]:
+    """Factor, suffix and format spec of a unit: percentages to a tenth of a point, as in the chapters."""
+    if unit == "fraction":
+        return 100.0, " %", ".1f"
+    return 1.0, "" if unit == "count" else f" {unit}", ".3g"
 
 
 def fmt_value(value: float, unit: str = "fraction") -> str:
     """``'81.2 %'`` for a fraction, ``'12'`` for a count, ``'0.41 s'`` otherwise."""
-    scale, suffix = _scale(unit)
-    return f"{scale * value:{_spec(unit)}}{suffix}"
+    scale, suffix, spec = _scale(unit)
+    return f"{scale * value:{spec}}{suffix}"
 
 
 def fmt(n: Number) -> str:
@@ -204,5 +203,5 @@ def fmt(n: Number) -> str:
         return "(verdict)"
     if n.lo == n.hi == n.value:
         return fmt_value(n.value, n.unit)
-    scale, _ = _scale(n.unit)
-    return f"{fmt_value(n.value, n.unit)} [{scale * n.lo:{_spec(n.unit)}}, {scale * n.hi:{_spec(n.unit)}}]"
+    scale, _, spec = _scale(n.unit)
+    return f"{fmt_value(n.value, n.unit)} [{scale * n.lo:{spec}}, {scale * n.hi:{spec}}]"
