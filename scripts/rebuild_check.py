@@ -43,26 +43,27 @@ def main(argv: list[str] | None = None) -> int:
 
     import dataclasses
 
-    from study import experiments, results
+    from study.book import results
+    from study.experiments import Runner, preset, stats
     from study.learn.train import TrainConfig
     from study.simulate import synth
 
     source = results.load(a.results)["table1.z.mean"].source
     cfg = TrainConfig(**source["config"])
-    p = experiments.preset(a.preset)
+    p = preset(a.preset)
     if a.seeds:
         p = dataclasses.replace(p, seeds=p.seeds[:a.seeds])
     synth_cfg = synth.SynthConfig.preset(a.preset)
     if a.light_priors == "balls":
         synth_cfg = synth_cfg.replace(light=synth.LIGHT_BALLS)
     ds = synth.dataset(synth_cfg, seed=a.data_seed, data_dir=a.data_dir)
-    rows = experiments.seed_runs(ds, cfg, p, a.data_dir, progress=True, workers=a.workers or None)
+    rows = Runner(ds, p, a.data_dir.resolve(), workers=a.workers, progress=True).seed_runs(cfg)
     with tempfile.TemporaryDirectory() as tmp:
         part = Path(tmp) / "table1.json"
         os.environ[results.ENV] = str(part)
         res = results.Results("table1")
-        for d, s in ((r["dims"], r) for r in experiments.summarise(rows, ("dims",))):
-            best, best_iv = experiments.best_run_interval([r for r in rows if r["dims"] == d])
+        for d, s in ((r["dims"], r) for r in stats.summarise(rows, ("dims",))):
+            best, best_iv = stats.best_run_interval([r for r in rows if r["dims"] == d])
             res.add(f"{d}.best", best_iv, what=f"best seed, {d}", seed=best["seed"])
             res.add(f"{d}.mean", s["interval"], what=f"mean over seeds, {d}", config=dataclasses.asdict(cfg))
             res.add(f"{d}.failed", s["failed"], unit="count", what="seeds that failed to train")

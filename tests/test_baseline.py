@@ -4,7 +4,7 @@ import model_toys
 import numpy as np
 import pytest
 
-from study.errors import ConfigError, TrajectoryError
+from study.core.errors import ConfigError, TrajectoryError
 from study.learn import baseline
 
 
@@ -25,9 +25,17 @@ def exact_bounce(e: float, h0: float = 1.0, rest: float = 0.1, fps: float = 240.
     return z
 
 
+def heights(*z: np.ndarray) -> np.ndarray:
+    """Height series (T,) as trajectories (n, T, 3) that do not move horizontally."""
+    x = np.zeros((len(z), len(z[0]), 3))
+    x[:, :, 2] = np.stack(z)
+    return x
+
+
 @pytest.mark.parametrize("e", [0.3, 0.6, 0.85])
 def test_restitution_of_an_exact_bounce(e):
-    restitution, ratio, bounces = baseline._bounce_features(exact_bounce(e), fps=240.0)
+    (restitution, ratio, bounces), = baseline.features(heights(exact_bounce(e)), 240.0, "z")
+    assert baseline.FEATURES["z"] == ("restitution", "ratio", "bounces")
     assert restitution == pytest.approx(e, abs=0.03)
     assert ratio == pytest.approx(e, abs=0.03)
     assert bounces >= 1
@@ -35,14 +43,14 @@ def test_restitution_of_an_exact_bounce(e):
 
 def test_no_impact_gives_zero_features():
     falling = 1.0 - 0.5 * 9.81 * (np.arange(10) / 30) ** 2
-    assert baseline._bounce_features(falling, 30.0) == (0.0, 0.0, 0.0)
+    assert baseline.features(heights(falling), 30.0, "z").tolist() == [[0.0, 0.0, 0.0]]
 
 
 def test_logistic_regression_recovers_weights():
     rng = np.random.default_rng(0)
     f = rng.normal(size=(20000, 2))
     w_true = np.array([2.0, -1.0, 0.5])
-    y = (rng.uniform(size=20000) < baseline._sigmoid(f @ w_true[:2] + w_true[2])).astype(float)
+    y = (rng.uniform(size=20000) < baseline.sigmoid(f @ w_true[:2] + w_true[2])).astype(float)
     np.testing.assert_allclose(baseline.logistic_regression(f, y, l2=0.0), w_true, atol=0.1)
 
 

@@ -16,7 +16,7 @@ import pytest
 
 from study import book
 from study.cli import main
-from study.errors import ChapterError, ConfigError
+from study.core.errors import ChapterError, ConfigError
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -102,7 +102,7 @@ preset = "paper"
 import matplotlib.pyplot as plt
 from myst_nb import glue
 
-from study.progress import Progress
+from study.core.progress import Progress
 
 with Progress("counting", total=3) as bar:
     for _ in range(3):

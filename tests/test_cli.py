@@ -7,12 +7,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-import model_toys
+import json
+
 import pytest
 
 from study import cli
 from study.see import render
-from study.simulate import data
 
 # CI runs as root, where a read-only folder is still writable: these paths cannot exist at all.
 UNDER_PROC = "/proc/study-cannot-write-here"
@@ -26,8 +26,8 @@ def one_error_line(capsys: pytest.CaptureFixture[str]) -> str:
 
 
 @pytest.fixture(scope="module")
-def dataset_file(tmp_path_factory) -> Path:
-    return data.save(model_toys.dataset(n=8, T=20), tmp_path_factory.mktemp("d") / "toy.npz")
+def dataset_file(smoke_dataset) -> Path:
+    return smoke_dataset.path
 
 
 @pytest.fixture(scope="module")
@@ -69,6 +69,38 @@ def test_track_out_and_overlay(tmp_path, small_video, capsys, option, name):
         line = one_error_line(capsys)
         assert rc == 2 and str(dest / name) in line and why in line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file.txt"]
+
+
+def test_train_leaves_nothing_behind_on_bad_data(tmp_path, dataset_file, capsys):
+    truncated = tmp_path / "truncated.npz"
+    truncated.write_bytes(dataset_file.read_bytes()[: dataset_file.stat().st_size // 2])
+    cases = [(tmp_path / "missing.npz", "no such file", "0.3"), (truncated, "cannot be read", "0.3"),
+             (dataset_file, "needs 150", "5")]
+    for data_file, why, length in cases:
+        out = tmp_path / "new" / "folders" / "model"
+        rc = cli.main(["train", "--data", str(data_file), "--length", length, "--out", str(out), "--no-progress"])
+        line = one_error_line(capsys)
+        assert rc == 2 and why in line, line
+        assert not (tmp_path / "new").exists(), f"{why}: the folders made for the output are removed"
+
+
+@pytest.mark.slow  # trains a tiny model
+def test_a_failed_model_is_reported_by_train_and_classify(tmp_path, dataset_file, capsys):
+    out = tmp_path / "m"
+    rc = cli.main(["train", "--data", str(dataset_file), "--length", "0.5", "--epochs", "1", "--out", str(out),
+                   "--no-progress"])
+    captured = capsys.readouterr()
+    assert rc == 0 and json.loads(captured.out)["failed"] is True
+    warning = [ln for ln in captured.err.splitlines() if ln.startswith("study: warning: ")]
+    assert len(warning) == 1 and "failed to train" in warning[0] and "--seed" in warning[0]
+    assert json.loads((out / "meta.json").read_text())["failed"] is True
+    csv = tmp_path / "t.csv"
+    csv.write_text("frame,t_s,u_px,v_px,height_m,status,segment,confidence\n"
+                   + "".join(f"{i},{i / 30:.6f},10,{50 + i},{0.5 - i / 100:.4f},measured,0,1\n" for i in range(20)))
+    assert cli.main(["classify", str(csv), "--model", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "study: warning: " in captured.err and "failed to train" in captured.err
+    assert captured.out.startswith(f"{csv}: ")
 
 
 def test_book_output_folder(tmp_path, capsys):

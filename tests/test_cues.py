@@ -1,10 +1,10 @@
-"""What a window of each trajectory holds: the rules of study.cues on a toy set whose only cue is drag."""
+"""What a window of each trajectory holds: the rules of study.experiments.cues on a toy set whose only cue is drag."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from study import cues
+from study.experiments import cues
 from study.simulate import data
 
 

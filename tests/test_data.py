@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from study.errors import DataError
+from study.core.errors import DataError
 from study.simulate import data
 
 

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from study.errors import ConfigError
-from study.learn import decide
+from study.core.errors import ConfigError
+from study.experiments import decide
 
 
 @pytest.fixture

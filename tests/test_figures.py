@@ -1,29 +1,13 @@
-"""The book's figure style: class colours, and files that are byte-identical for the same figure."""
+"""The book's figure style: class colours and the colour cycle."""
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
-import numpy as np
-import pytest
 
-from study import figures
-from study.errors import ConfigError
-
-
-def draw() -> plt.Figure:
-    figures.use_style()
-    fig, ax = plt.subplots()
-    t = np.linspace(0.0, 2.0, 50)
-    for name, e in (("light", 0.8), ("heavy", 0.3)):
-        ax.plot(t, np.abs(np.sin(3 * t)) * np.exp(-t / e), color=figures.CLASS_COLORS[name], label=name)
-    ax.set(xlabel="time (s)", ylabel="height z (m)", title="a figure")
-    ax.legend()
-    return fig
+from study.book import figures
 
 
 def test_class_colors_are_okabe_ito_blue_and_vermillion() -> None:
@@ -33,22 +17,15 @@ def test_class_colors_are_okabe_ito_blue_and_vermillion() -> None:
     assert [c.upper() for c in cycle[:2]] == ["#0072B2", "#D55E00"]
 
 
-@pytest.mark.parametrize("suffix", [".png", ".svg"])
-def test_same_figure_gives_same_bytes(tmp_path: Path, suffix: str) -> None:
-    a, b = tmp_path / f"a{suffix}", tmp_path / f"b{suffix}"
-    fig = draw()
-    figures.save(fig, a)
-    plt.close(fig)
-    fig = draw()
-    figures.save(fig, b)
-    plt.close(fig)
-    assert a.read_bytes() == b.read_bytes()
-    assert b"Matplotlib v" not in a.read_bytes() and b"<dc:date>" not in a.read_bytes()
-    assert not list(tmp_path.glob(".*.tmp"))
+def test_accuracy_vs_length_draws_both_inputs_with_failed_runs_marked() -> None:
+    from study.learn.metrics import Interval
 
-
-def test_unknown_suffix_is_a_config_error(tmp_path: Path) -> None:
-    fig = draw()
-    with pytest.raises(ConfigError, match=r"\.jpeg"):
-        figures.save(fig, tmp_path / "x.jpeg")
+    summary = [{"dims": d, "length": L, "mean": 0.7, "interval": Interval(0.7, 0.65, 0.75, "x")}
+               for d in ("xyz", "z") for L in (1.0, 2.0)]
+    rows = [{"dims": d, "length": L, "accuracy": a, "failed": a < 0.55}
+            for d in ("xyz", "z") for L in (1.0, 2.0) for a in (0.5, 0.72)]
+    fig = figures.accuracy_vs_length(summary, rows)
+    assert [ax.get_title() for ax in fig.axes] == ["X, Y, Z", "Z only"]
+    labels = fig.axes[0].get_legend_handles_labels()[1]
+    assert "failed to train (2 runs)" in labels
     plt.close(fig)

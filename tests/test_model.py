@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import torch
 
-from study.errors import ConfigError, TrajectoryError
+from study.core.errors import ConfigError, TrajectoryError
 from study.learn import native
 from study.learn.model import CELLS, Classifier, PeepholeLSTM, peephole_reference
 from study.learn.stream import Streamer

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from study.errors import ConfigError, TrajectoryError
+from study.core.errors import ConfigError, TrajectoryError
 from study.simulate import observe
 
 
@@ -87,7 +87,7 @@ def test_perspective_of_a_level_camera_recovers_heights_in_the_plane_it_faces():
 def test_height_scale_and_composition():
     x = parabolas(10)
     assert np.allclose(observe.height_scale(x, 2.0)[:, :, 2] - 0.1, 2 * (x[:, :, 2] - 0.1))
-    ob = observe.Observation(noise=0.005, drop=0.1, camera_fps=15.0, scale=1.1)
+    ob = observe.Observation(noise=0.005, drop=0.1, camera_fps=15.0, height_factor=1.1)
     a = ob.apply(x, 30.0, np.random.default_rng(5))
     b = ob.apply(x, 30.0, np.random.default_rng(5))
     assert a.shape == x.shape and (a == b).all(), "seeded: the same observation twice"
@@ -119,9 +119,9 @@ def test_bad_trajectories():
         observe.drop(x, 0.1, np.random.default_rng(0))
 
 
-def test_across_view_turns_each_throw_to_cross_the_camera():
+def test_turned_across_view_turns_each_throw_to_cross_the_camera():
     x = parabolas(20)
-    turned = observe.across_view(x)
+    turned = observe.turned_across_view(x)
     d = turned[:, -1, :2] - turned[:, 0, :2]
     np.testing.assert_allclose(d[:, 1], 0, atol=1e-12)
     assert (d[:, 0] >= 0).all()

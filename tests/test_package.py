@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 import study
-from study import cache
+from study.core import cache
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from study.errors import ConfigError
+from study.core.errors import ConfigError
 from study.simulate import checks, synth
 from study.simulate.contact import penetration_bound
 

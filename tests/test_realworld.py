@@ -7,8 +7,8 @@ import os
 import numpy as np
 import pytest
 
-from study import realworld
-from study.errors import ConfigError, DataError
+from study.experiments import realworld
+from study.core.errors import ConfigError, DataError
 from study.see import render
 from study.simulate import synth
 
@@ -59,7 +59,7 @@ def test_classify_rows_and_accuracy(rendered_set):
     assert err["found"] >= 0.9 and err["mean_px"] < 3.0
 
 
-def test_scale_factor_reaches_the_model(rendered_set):
+def test_height_factor_reaches_the_model(rendered_set):
     seen = []
 
     class Spy(HeightRangeModel):
@@ -68,8 +68,8 @@ def test_scale_factor_reaches_the_model(rendered_set):
             return super().predict_proba(x)
 
     tracks = realworld.track_all(rendered_set[:1], progress=False)
-    realworld.classify(Spy(), rendered_set[:1], tracks, scale_factor=1.0, progress=False)
-    realworld.classify(Spy(), rendered_set[:1], tracks, scale_factor=2.0, progress=False)
+    realworld.classify(Spy(), rendered_set[:1], tracks, height_factor=1.0, progress=False)
+    realworld.classify(Spy(), rendered_set[:1], tracks, height_factor=2.0, progress=False)
     rest = rendered_set[0].rest_height
     n = np.count_nonzero(seen[0])
     np.testing.assert_allclose(seen[1][:n] - rest, 2 * (seen[0][:n] - rest), rtol=1e-5, atol=1e-6)

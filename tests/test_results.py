@@ -7,8 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from study import cli, results
-from study.errors import ConfigError, DataError
+from study import cli
+from study.book import results
+from study.core.errors import ConfigError, DataError
 from study.learn.metrics import Interval, at_chance, bootstrap_accuracy, wilson
 
 

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from study.errors import ConfigError, DataError
+from study.core.errors import ConfigError, DataError
 from study.simulate import data, synth
 
 
@@ -94,7 +94,7 @@ def test_load_rejects_a_header_whose_config_does_not_match_its_key(tmp_path, smo
 
 def test_a_file_from_before_sleeping_existed_loads_as_awake(tmp_path, smoke_dataset):
     """Headers written before SynthConfig.sleep_tolerance lack the field: such a file still loads, as sleep 0."""
-    from study import cache
+    from study.core import cache
 
     meta = dict(smoke_dataset.meta)
     old = {k: v for k, v in meta["config"].items() if k != "sleep_tolerance"}

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 import model_toys
-from study import cli, realworld
-from study.errors import ConfigError, TrackingError, VideoError
+from study import cli
+from study.experiments import realworld
+from study.core.errors import ConfigError, TrackingError, VideoError
 from study.learn import train
 from study.see import render, track, video
 from study.simulate import measure
@@ -115,7 +116,7 @@ def test_calibration_and_model_input(tmp_path):
     # A disc 13 px across (radius 6 plus the centre pixel) falling 2 px per frame for 40 frames at 30 fps.
     centres = [(80, 20 + 2 * i) for i in range(40)]
     traj = track.track_video(blob_video(tmp_path / "fall.mp4", centres), FAST, object_size=0.12)
-    assert traj.units == "m" and traj.scale == pytest.approx(0.12 / 13, rel=0.1)
+    assert traj.units == "m" and traj.height_per_pixel == pytest.approx(0.12 / 13, rel=0.1)
     assert traj.height[-1] == pytest.approx(0.0, abs=1e-9) and traj.height[0] > 0.6
     x = track.to_model_input(traj, fps=15.0, n_frames=30, rest_height=0.06)
     assert x.shape == (30, 3) and x.dtype == np.float32

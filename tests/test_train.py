@@ -10,8 +10,8 @@ import pytest
 import torch
 
 from study import cli
-from study.errors import ConfigError, ModelError, TrajectoryError
-from study.fielddoc import field_docs
+from study.core.errors import ConfigError, ModelError, TrajectoryError
+from study.core.fielddoc import field_docs
 from study.learn import train
 from study.learn.config import CELLS
 from study.simulate import data
@@ -154,42 +154,71 @@ def test_learns_the_toy_problem():
     assert train.evaluate(tm, ds.test)["accuracy"] >= 0.8
 
 
-def test_cli_options_are_the_train_config_fields():
-    """`study train` offers every TrainConfig field, with the field's default and its docstring as help."""
-    sub = next(a for a in cli.build_parser()._actions if a.dest == "command").choices["train"]
-    options = {a.dest: a for a in sub._actions}
+def test_cli_options_are_the_train_config_fields(capsys):
+    """`study train` offers every TrainConfig field, with the field's default, its docstring as help and its
+    Literal's values as choices."""
+    args = cli.build_parser().parse_args(["train", "--data", "d.npz", "--out", "m"])
     for f in dataclasses.fields(train.TrainConfig):
-        assert f.name in options, f.name
-        if options[f.name].required:
-            continue
-        assert options[f.name].default == f.default, f.name
-        assert options[f.name].help.startswith(field_docs(train.TrainConfig)[f.name].split("(")[0][:20]), f.name
-    assert tuple(options["cell"].choices) == CELLS
+        assert getattr(args, f.name) == f.default, f.name
+    with pytest.raises(SystemExit):
+        cli.main(["train", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    for f in dataclasses.fields(train.TrainConfig):
+        assert " ".join(field_docs(train.TrainConfig)[f.name].split())[:30].replace("``", "'") in help_text, f.name
+    with pytest.raises(SystemExit):
+        cli.build_parser().parse_args(["train", "--data", "d", "--out", "m", "--cell", "transformer"])
+    err = capsys.readouterr().err
+    assert "invalid choice: 'transformer'" in err and all(repr(c) in err for c in CELLS)
 
 
 @pytest.mark.slow
-def test_cli_train_and_evaluate(tmp_path, ds, capsys):
-    path = data.save(ds, tmp_path / "d.npz")
-    args = ["train", "--data", str(path), "--dims", "z", "--length", "0.5", "--epochs", "1", "--batch-size", "8",
+def test_cli_train_and_evaluate(tmp_path, smoke_dataset, capsys):
+    path = str(smoke_dataset.path)
+    args = ["train", "--data", path, "--dims", "z", "--length", "0.5", "--epochs", "1", "--batch-size", "8",
             "--out", str(tmp_path / "m"), "--no-progress"]
     assert cli.main(args) == 0
-    capsys.readouterr()
-    assert cli.main(["evaluate", "--model", str(tmp_path / "m"), "--data", str(path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["model"] == str(tmp_path / "m") and out["failed"] is True, "3 validation throws cannot show learning"
+    assert cli.main(["evaluate", "--model", str(tmp_path / "m"), "--data", path]) == 0
     res = json.loads(capsys.readouterr().out)
-    assert set(res["per_class_accuracy"]) == {"light", "heavy"} and np.sum(res["confusion"]) == 24
-    assert res["trained_on"] == res["data_key"] == "toy"
+    assert set(res["per_class_accuracy"]) == {"light", "heavy"} and np.sum(res["confusion"]) == len(smoke_dataset.test)
+    assert res["trained_on"] == res["data_key"] == smoke_dataset.key
     assert train.load(tmp_path / "m").dims == "z"
 
 
-def test_cli_bad_input_one_line_exit_2(tmp_path, ds, capsys):
-    path = data.save(ds, tmp_path / "d.npz")
-    assert cli.main(["train", "--data", str(path), "--dims", "z", "--length", "5", "--out", str(tmp_path / "m")]) == 2
+def test_cli_bad_input_one_line_exit_2(tmp_path, smoke_dataset, capsys):
+    path = str(smoke_dataset.path)
+    assert cli.main(["train", "--data", path, "--dims", "z", "--length", "5", "--out", str(tmp_path / "m")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "needs 150" in err
-    assert cli.main(["evaluate", "--model", str(tmp_path / "none"), "--data", str(path)]) == 2
+    assert not (tmp_path / "m").exists(), "nothing left behind"
+    assert cli.main(["evaluate", "--model", str(tmp_path / "none"), "--data", path]) == 2
     assert "no such directory" in capsys.readouterr().err
     with pytest.raises(SystemExit):
-        cli.main(["train", "--data", str(path), "--dims", "xy", "--length", "1", "--out", str(tmp_path / "m")])
+        cli.main(["train", "--data", path, "--dims", "xy", "--length", "1", "--out", str(tmp_path / "m")])
+
+
+def test_a_run_that_cannot_learn_says_it_failed(ds):
+    rng = np.random.default_rng(0)
+    shuffled = dataclasses.replace(ds, train=dataclasses.replace(ds.train, y=rng.permutation(ds.train.y)))
+    cfg = dataclasses.replace(TINY, dims="z", max_epochs=3, min_epochs=0)
+    with pytest.warns(train.TrainingFailedWarning, match="failed to train.*--lr"):
+        tm = train.fit(shuffled, cfg, progress=False)
+    assert tm.failed and "never left the initial plateau" in tm.failure()
+
+
+@pytest.mark.slow
+def test_the_defaults_train(tmp_path):
+    """TrainConfig's defaults are a protocol that trains: a run with them on a task a network can learn is not
+    reported failed, and its model says so when saved and loaded."""
+    import warnings
+
+    toy = model_toys.dataset(n=128, T=90)  # 3 s at 30 fps: the default input length
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", train.TrainingFailedWarning)
+        tm = train.fit(toy, train.TrainConfig(), progress=False)
+    assert not tm.failed and tm.failure() == "" and tm.n_val == 26
+    assert not train.load(tm.save(tmp_path / "m")).failed
 
 
 # --- the training protocol: forget bias, early stopping, clipping, schedule, divergence --------------
@@ -309,16 +338,13 @@ def test_a_format_1_model_reads_with_the_old_meaning_and_a_gap_is_refused(tm, tm
 
 
 def test_randomised_observation_training_sees_other_positions_than_exact(ds):
-    cfg = dataclasses.replace(FROZEN, observe="randomised", observe_noise=0.01, observe_drop=0.1, max_epochs=1)
-    tr, va = train.split_train_val(len(ds.train.y), cfg.val_fraction, cfg.seed)
-    views, x_val = train._inputs(ds.train.x[:, :15], tr, va, cfg, ds.fps)
-    exact, _ = train._inputs(ds.train.x[:, :15], tr, va, dataclasses.replace(cfg, observe="exact"), ds.fps)
-    assert len(views) == train.OBSERVED_VIEWS and len(exact) == 1
-    assert not torch.equal(views[0], exact[0]) and not torch.equal(views[0], views[1])
-    again, _ = train._inputs(ds.train.x[:, :15], tr, va, cfg, ds.fps)
-    assert all(torch.equal(a, b) for a, b in zip(views, again)), "seeded"
-    tm = train.fit(ds, cfg, progress=False)
+    cfg = dataclasses.replace(FROZEN, observe="randomised", observe_noise=0.01, observe_drop=0.1, max_epochs=2)
+    tm = train.fit(ds, cfg, progress=False, warn=False)
+    exact = train.fit(ds, dataclasses.replace(cfg, observe="exact"), progress=False, warn=False)
+    again = train.fit(ds, cfg, progress=False, warn=False)
     assert tm.config.observe == "randomised" and np.isfinite(tm.history[0]["val_loss"])
+    assert tm.history != exact.history, "trained and validated on observed positions, not the exact ones"
+    assert tm.history == again.history, "seeded: the same observations every time"
     with pytest.raises(ConfigError, match="observe"):
         train.fit(ds, dataclasses.replace(cfg, observe="blurred"), progress=False)
 

@@ -7,7 +7,7 @@ A reproduction of Fathollahi & Kasturi, arXiv:1609.00361, as a package in three 
 - ``study.learn``: the paper's peephole LSTM (with its compiled time loops), training, evaluation,
   frame-by-frame streaming and a physics baseline.
 - ``study.see``: video files, MuJoCo renders with ground truth, and the colour tracker.
-- On top: ``study.experiments`` (the runs behind every table and figure), ``study.realworld`` (the
+- On top: ``study.experiments`` (the runs behind every table and figure), ``study.experiments.realworld`` (the
   video experiment), ``study.book`` (papermill and Jupyter Book) and ``study.cli`` (the command).
 
 Every module is imported on demand, so ``import study`` stays cheap, and the modules users reach for
@@ -28,9 +28,12 @@ CLASSES: tuple[str, str] = ("light", "heavy")
 """Class names by label: 0 = light (bounces; safe to pass over), 1 = heavy (slides; must avoid)."""
 
 SHORT_NAMES: dict[str, str] = {
-    **{m: f"study.simulate.{m}" for m in ("scene", "contact", "synth", "data", "checks", "measure")},
-    **{m: f"study.learn.{m}" for m in ("config", "metrics", "model", "native", "gru", "train", "stream", "baseline")},
+    **{m: f"study.simulate.{m}" for m in ("scene", "contact", "synth", "data", "checks", "measure", "observe")},
+    **{m: f"study.learn.{m}" for m in ("config", "metrics", "model", "native", "gru", "train", "stream", "baseline",
+                                        "rocket")},
     **{m: f"study.see.{m}" for m in ("video", "render", "track")},
+    **{m: f"study.experiments.{m}" for m in ("cues", "realworld", "decide")},
+    **{m: f"study.book.{m}" for m in ("results", "figures", "tables")},
 }
 """``study.<short>`` -> the module it names, for ``from study import synth`` and friends."""
 

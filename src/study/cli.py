@@ -1,6 +1,6 @@
 """The ``study`` command line: one subcommand per job, each a thin wrapper over the package.
 
-Every error caused by the user's input is a :class:`study.errors.StudyError`; ``main`` prints it as
+Every error caused by the user's input is a :class:`study.core.errors.StudyError`; ``main`` prints it as
 one line, ``study: error: ...``, and returns 2. Anything else is a bug and keeps its traceback.
 """
 
@@ -14,9 +14,9 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from study import presets
-from study.errors import StudyError, check_writable
-from study.fielddoc import field_docs
+from study.core import presets
+from study.core.errors import StudyError, check_writable, removed_on_error
+from study.core.fielddoc import field_docs
 
 
 def _plain(doc: str) -> str:
@@ -26,14 +26,18 @@ def _plain(doc: str) -> str:
 
 def _add_fields(p: argparse.ArgumentParser, cls: type, names: Sequence[str], *, flags: dict[str, str] | None = None,
                 choices: dict[str, Sequence[str]] | None = None) -> None:
-    """One option per field of the config dataclass ``cls``, its default, type and help taken from the field
-    itself (its docstring is the help), so the command line cannot drift from the config."""
+    """One option per field of the config dataclass ``cls``, its default, type, choices and help taken from the
+    field itself (its docstring is the help, its ``Literal`` type the choices), so the command line cannot
+    drift from the config."""
+    from study.learn.config import choices as literal_choices  # no torch
+
     fields = {f.name: f for f in dataclasses.fields(cls)}
     docs = field_docs(cls)
+    allowed = {**literal_choices(cls), **(choices or {})}
     for name in names:
         default = fields[name].default
         help_text = _plain(docs[name]) + " (default: %(default)s)"
-        extra = {"choices": choices[name]} if choices and name in choices else {}
+        extra = {"choices": allowed[name]} if name in allowed else {}
         flag = (flags or {}).get(name, "--" + name.replace("_", "-"))
         p.add_argument(flag, dest=name, type=type(default), default=default, help=help_text, **extra)
 
@@ -70,11 +74,12 @@ def _add_synth(sub: argparse._SubParsersAction) -> None:
         from study.simulate import synth
 
         cfg = synth.SynthConfig.preset(a.preset)
-        if a.out is not None:
-            check_writable(a.out, "dataset")
-        path = synth.generate_to_file(
-            cfg, seed=a.seed, out=a.out, data_dir=a.data_dir, threads=a.threads, progress=not a.no_progress
-        )
+        with removed_on_error(a.out):
+            if a.out is not None:
+                check_writable(a.out, "dataset")
+            path = synth.generate_to_file(
+                cfg, seed=a.seed, out=a.out, data_dir=a.data_dir, threads=a.threads, progress=not a.no_progress
+            )
         print(path)
         return 0
 
@@ -115,18 +120,28 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
         "working folder (default: .)",
     )
     p.add_argument("--no-build", action="store_true", help="execute the chapters but skip the jupyter-book build")
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        default="",
+        help="train the chapters' runs on a Dask cluster instead of a local process pool: 'local' starts one "
+        "LocalCluster for the build (on the loopback address, one single-threaded worker per core); an address "
+        "(tls://host:8786) is a scheduler you started, reached with your Dask configuration's security settings. "
+        "Every worker needs the study package installed and the data folder on a shared path; a scheduler must "
+        "never listen on an open network (it runs whatever code reaches it). Not part of any cache key",
+    )
 
     def run(a: argparse.Namespace) -> int:
         from study import book
 
-        book.build(root=a.root, preset=a.preset, force=a.force, only=a.only, html=not a.no_build)
+        book.build(root=a.root, preset=a.preset, force=a.force, only=a.only, html=not a.no_build, scheduler=a.scheduler)
         return 0
 
     p.set_defaults(run=run)
 
 
 def _add_train(sub: argparse._SubParsersAction) -> None:
-    from study.learn.config import CELLS, DIMS, FORGET_INITS, LOSSES, LR_SCHEDULES, OBSERVES, TrainConfig  # no torch
+    from study.learn.config import TrainConfig  # no torch
 
     p = sub.add_parser(
         "train",
@@ -136,35 +151,41 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
             "frame) on the train split of a dataset file, early-stopping on a seeded validation part "
             "of it; the test split is not touched. Deterministic for a given seed. Writes the model "
             "directory (weights, config, normalisation, history, data key) atomically. Every option "
-            "below is a field of study.learn.config.TrainConfig, with its default."
+            "below is a field of study.learn.config.TrainConfig, with its default: the study's protocol "
+            "(Table 1's configuration on the paper preset). Prints JSON: the model, its best epoch, its "
+            "validation accuracy and whether it failed to train (then a warning says what to change)."
         ),
     )
     p.add_argument("--data", type=Path, required=True, help="dataset file (.npz) written by `study synth`")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="model directory to write (replaced if it exists)")
-    p.add_argument("--dims", choices=list(DIMS), required=True, help=_plain(field_docs(TrainConfig)["dims"]))
-    p.add_argument("--length", type=float, required=True, metavar="SECONDS", help=_plain(field_docs(TrainConfig)["length"]))
-    _add_fields(p, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig) if f.name not in ("dims", "length")],
-                flags={"max_epochs": "--epochs"},
-                choices={"cell": CELLS, "forget_init": FORGET_INITS, "lr_schedule": LR_SCHEDULES, "observe": OBSERVES,
-                         "loss_at": LOSSES})
+    _add_fields(p, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig)], flags={"max_epochs": "--epochs"})
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
         import json
 
         from study.learn import train
-        from study.simulate import data
+        from study.simulate import synth
 
-        check_writable(a.out / "weights.pt", "model directory")
-        ds = data.load(a.data)
         fields = {f.name for f in dataclasses.fields(TrainConfig)}
         cfg = TrainConfig(**{k: v for k, v in vars(a).items() if k in fields})
-        tm = train.fit(ds, cfg, progress=not a.no_progress)
-        tm.save(a.out)
-        print(json.dumps({"model": str(a.out), "best_epoch": tm.best_epoch, "val_accuracy": tm.val_accuracy}))
+        with removed_on_error(a.out):
+            check_writable(a.out / "weights.pt", "model directory")
+            ds = synth.load(a.data)
+            tm = train.fit(ds, cfg, progress=not a.no_progress, warn=False)
+            tm.save(a.out)
+        if tm.failed:
+            _warn(f"{a.out}: {tm.failure()}")
+        print(json.dumps({"model": str(a.out), "best_epoch": tm.best_epoch, "val_accuracy": tm.val_accuracy,
+                          "failed": tm.failed}))
         return 0
 
     p.set_defaults(run=run)
+
+
+def _warn(message: str) -> None:
+    """One warning line on the terminal, as errors are printed."""
+    print(f"study: warning: {' '.join(message.split())}", file=sys.stderr)
 
 
 def _add_tracker_options(p: argparse.ArgumentParser) -> None:
@@ -212,15 +233,16 @@ def _add_track(sub: argparse._SubParsersAction) -> None:
     def run(a: argparse.Namespace) -> int:
         from study.see import track
 
-        for path, what in ((a.out, "trajectory CSV"), (a.overlay, "overlay video")):
-            if path is not None:
-                check_writable(path, what)  # before the tracking, not after it
-        traj = track.track_video(a.video, _track_config(a), ground_v=a.ground_v, object_size=a.object_size,
-                                 metres_per_pixel=a.metres_per_pixel)
-        if a.out:
-            track.write_csv(traj, a.out)
-        if a.overlay:
-            track.write_overlay(traj, a.overlay, progress=not a.no_progress)
+        with removed_on_error(a.out, a.overlay):
+            for path, what in ((a.out, "trajectory CSV"), (a.overlay, "overlay video")):
+                if path is not None:
+                    check_writable(path, what)  # before the tracking, not after it
+            traj = track.track_video(a.video, _track_config(a), ground_v=a.ground_v, object_size=a.object_size,
+                                     metres_per_pixel=a.metres_per_pixel)
+            if a.out:
+                track.write_csv(traj, a.out)
+            if a.overlay:
+                track.write_overlay(traj, a.overlay, progress=not a.no_progress)
         pieces = ", ".join(f"{s.t[0]:.2f}-{s.t[-1]:.2f} s" for s in traj.segments())
         print(f"{a.video}: found in {int(traj.measured.sum())} of {len(traj.t)} frames, "
               f"{int(traj.filled.sum())} filled, {len(traj.segments())} piece(s): {pieces}")
@@ -246,10 +268,10 @@ def _add_evaluate(sub: argparse._SubParsersAction) -> None:
         import json
 
         from study.learn import train
-        from study.simulate import data
+        from study.simulate import synth
 
         tm = train.load(a.model)
-        ds = data.load(a.data)
+        ds = synth.load(a.data)
         res = train.evaluate(tm, ds.test)
         res.update(model=str(a.model), data=str(a.data), data_key=ds.key, trained_on=tm.data_key)
         print(json.dumps(res, indent=1))
@@ -281,11 +303,13 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
 
     def run(a: argparse.Namespace) -> int:
         from study import CLASSES
-        from study.errors import ConfigError, ModelError
+        from study.core.errors import ConfigError, ModelError
         from study.learn import train
         from study.see import track
 
         tm = train.load(a.model)
+        if tm.failed:
+            _warn(f"model {a.model}: {tm.failure()}; its answers are near chance")
         if tm.dims != "z":
             raise ModelError(
                 f"model {a.model} was trained on {tm.dims!r}; one camera gives only the height: "
@@ -329,7 +353,7 @@ def _add_results(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--all", action="store_true", help="with --compare, list every shared number, not only those that moved")
 
     def run(a: argparse.Namespace) -> int:
-        from study import results
+        from study.book import results
 
         mine = results.load(a.file)
         if a.compare is None:

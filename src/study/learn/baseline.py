@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from study.errors import ConfigError, check_range
+from study.core.errors import ConfigError, check_range
 from study.learn.config import DIMS, select_inputs
 from study.learn.metrics import metrics
 from study.simulate import measure
@@ -97,7 +97,7 @@ class PhysicsBaseline:
         """``x`` (n, T, 3) metres, T >= n_frames -> (n, 2) float64 [p_light, p_heavy]."""
         xs = select_inputs(x, "xyz", self.n_frames)  # validated, all three columns
         f = (features(xs, self.fps, self.dims) - self.mean) / self.std
-        p = _sigmoid(np.column_stack([f, np.ones(len(f))]) @ self.w)
+        p = sigmoid(np.column_stack([f, np.ones(len(f))]) @ self.w)
         return np.column_stack([1 - p, p])
 
     @property
@@ -106,7 +106,8 @@ class PhysicsBaseline:
         return dict(zip(FEATURES[self.dims] + ("bias",), map(float, self.w)))
 
 
-def _sigmoid(a: np.ndarray) -> np.ndarray:
+def sigmoid(a: np.ndarray) -> np.ndarray:
+    """The logistic function 1 / (1 + exp(-a)), elementwise, written with tanh so it cannot overflow."""
     return 0.5 * (1 + np.tanh(0.5 * a))
 
 
@@ -117,7 +118,7 @@ def logistic_regression(f: np.ndarray, y: np.ndarray, l2: float = 1e-3, iters: i
     reg = l2 * np.eye(A.shape[1])
     reg[-1, -1] = 0.0  # no penalty on the bias
     for _ in range(iters):
-        p = _sigmoid(A @ w)
+        p = sigmoid(A @ w)
         grad = A.T @ (p - y) / len(y) + reg @ w
         hess = (A * (p * (1 - p))[:, None]).T @ A / len(y) + reg
         step = np.linalg.solve(hess + 1e-9 * np.eye(len(w)), grad)

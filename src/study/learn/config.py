@@ -7,37 +7,43 @@ definitions, and the NumPy baseline can share them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from functools import cache
+from typing import Literal, get_args, get_type_hints
 
 import numpy as np
 
-from study.errors import ConfigError, TrajectoryError, check_range
+from study.core.errors import ConfigError, TrajectoryError, check_range
 
-DIMS: dict[str, tuple[int, ...]] = {"z": (2,), "xyz": (0, 1, 2)}
-"""Input dimensions by name: columns of the (x, y, z) trajectory the model sees."""
-
-CELLS = ("peephole", "no-peephole", "lstm", "gru")
+Dims = Literal["z", "xyz"]
+"""Input dimensions by name: the height only, or all three coordinates."""
+Cell = Literal["peephole", "no-peephole", "lstm", "gru"]
 """Recurrent cells the classifier offers: the paper's peephole LSTM; the same layer with its peepholes fixed
 at zero (an LSTM without peepholes on the same compiled loop: the ablation's control); ``nn.LSTM``;
 ``nn.GRU`` (as :class:`study.learn.gru.GRU`, on a compiled loop too)."""
-
-
-FORGET_INITS = ("constant", "chrono")
+ForgetInit = Literal["constant", "chrono"]
 """How the forget gates' biases start: all at ``forget_bias``, or chrono (Tallec & Ollivier 2018)."""
-LOSSES = ("last", "every")
+Loss = Literal["last", "every"]
 """Where the loss is taken: at the last frame only (the paper's), or at every frame."""
-OBSERVES = ("exact", "randomised")
+Observe = Literal["exact", "randomised"]
 """What a network is trained on: the simulator's positions, or positions as a random camera observes them."""
-LR_SCHEDULES = ("constant", "plateau")
+Schedule = Literal["constant", "plateau"]
 """Learning-rate schedules: fixed, or halved when the validation loss stalls for ``patience // 4`` epochs."""
+
+DIMS: dict[Dims, tuple[int, ...]] = {"z": (2,), "xyz": (0, 1, 2)}
+"""Columns of the (x, y, z) trajectory each input dimension name selects."""
+CELLS: tuple[Cell, ...] = get_args(Cell)
+"""Every cell, the paper's first."""
 
 
 @dataclass(frozen=True)
 class TrainConfig:
-    """Everything that determines a trained model, besides the data."""
+    """Everything that determines a trained model, besides the data. The defaults are the study's protocol,
+    Table 1's configuration on the paper preset (the grid's winner there), so a model trained with them
+    trains."""
 
-    dims: str = "xyz"
-    """Input dimensions: 'xyz' (all three coordinates) or 'z' (height only)."""
+    dims: Dims = "z"
+    """Input dimensions: 'z' (the height only: what one camera gives) or 'xyz' (all three coordinates)."""
     length: float = 3.0
     """Input length T in seconds: the model sees the first ``length`` seconds of each trajectory."""
     hidden: int = 64
@@ -46,11 +52,11 @@ class TrainConfig:
     """Recurrent layers (paper: 2)."""
     dropout: float = 0.2
     """Probability of dropping a unit of the last hidden state (paper's 'rate 0.8' read as keep-probability)."""
-    lr: float = 3e-3
+    lr: float = 1e-3
     """Adam learning rate."""
     batch_size: int = 32
     """Trajectories per gradient step."""
-    truncation: int = 30
+    truncation: int = 90
     """Truncated-BPTT length in frames: the loss back-propagates through at most this many last frames."""
     max_epochs: int = 150
     """Upper bound on passes over the training split."""
@@ -62,19 +68,19 @@ class TrainConfig:
     forget_bias: float = 1.0
     """Added to the forget gates' biases at initialisation (TensorFlow's LSTMCell default, which the paper
     used); the GRU, which has no forget gate, ignores it."""
-    forget_init: str = "constant"
+    forget_init: ForgetInit = "constant"
     """'constant' (every forget bias starts at forget_bias more than the uniform draw) or 'chrono' (biases
     log U(1, T - 1), input gates the negative, T the input frames: memory that spans the input)."""
     clip_norm: float = 1.0
     """Clip the gradient's global norm to this before each step; 0: no clipping."""
-    lr_schedule: str = "constant"
+    lr_schedule: Schedule = "constant"
     """'constant', or 'plateau': halve the learning rate when the validation loss has not improved for a
     quarter of ``patience`` epochs."""
-    loss_at: str = "last"
+    loss_at: Loss = "last"
     """'last': the loss is the answer's at the last frame (the paper's network); 'every': the mean of the
     answers' at every frame, so the network answers at every frame (back-propagation then runs through
     the whole input; ``truncation`` is not used; early stopping still scores the answer at the last frame)."""
-    observe: str = "exact"
+    observe: Observe = "exact"
     """What the network is trained on: 'exact' positions, or 'randomised' observations (each epoch sees the
     training split through a camera and tracker drawn at random, ``study.simulate.observe.randomised``)."""
     observe_noise: float = 0.0
@@ -86,16 +92,15 @@ class TrainConfig:
     """Share of the training split held out for early stopping (and for the grid search)."""
     seed: int = 0
     """Seeds the validation split, the initial weights, the batch order and the dropout masks."""
-    cell: str = "peephole"
+    cell: Cell = "peephole"
     """Recurrent cell: 'peephole' (the paper's), 'no-peephole' (the same layer, peepholes fixed at 0), 'lstm'
     (nn.LSTM) or 'gru' (nn.GRU)."""
 
     def check(self) -> None:
-        """Raise :class:`ConfigError` naming the first field that is out of range."""
-        if self.dims not in DIMS:
-            raise ConfigError(f"TrainConfig.dims = {self.dims!r} is unknown; use 'xyz' or 'z'")
-        if self.cell not in CELLS:
-            raise ConfigError(f"TrainConfig.cell = {self.cell!r} is unknown; use one of {CELLS}")
+        """Raise :class:`ConfigError` naming the first field that is out of range or not one of its choices."""
+        for name, allowed in choices(TrainConfig).items():
+            if getattr(self, name) not in allowed:
+                raise ConfigError(f"TrainConfig.{name} = {getattr(self, name)!r} is unknown; use one of {allowed}")
         check_range("TrainConfig.length (seconds)", self.length, 0, lo_open=True)
         for name in ("hidden", "layers", "batch_size", "truncation", "max_epochs", "patience"):
             value = getattr(self, name)
@@ -103,16 +108,8 @@ class TrainConfig:
                 raise ConfigError(f"TrainConfig.{name} = {value!r}; it must be a whole number >= 1")
         if not isinstance(self.min_epochs, int) or isinstance(self.min_epochs, bool) or self.min_epochs < 0:
             raise ConfigError(f"TrainConfig.min_epochs = {self.min_epochs!r}; it must be a whole number >= 0")
-        if self.forget_init not in FORGET_INITS:
-            raise ConfigError(f"TrainConfig.forget_init = {self.forget_init!r} is unknown; use one of {FORGET_INITS}")
-        if self.loss_at not in LOSSES:
-            raise ConfigError(f"TrainConfig.loss_at = {self.loss_at!r} is unknown; use one of {LOSSES}")
-        if self.observe not in OBSERVES:
-            raise ConfigError(f"TrainConfig.observe = {self.observe!r} is unknown; use one of {OBSERVES}")
         check_range("TrainConfig.observe_noise (metres)", self.observe_noise, 0.0, 1.0)
         check_range("TrainConfig.observe_drop", self.observe_drop, 0.0, 1.0, hi_open=True)
-        if self.lr_schedule not in LR_SCHEDULES:
-            raise ConfigError(f"TrainConfig.lr_schedule = {self.lr_schedule!r} is unknown; use one of {LR_SCHEDULES}")
         check_range("TrainConfig.forget_bias", self.forget_bias, -10, 10)
         check_range("TrainConfig.clip_norm", self.clip_norm, 0)
         check_range("TrainConfig.dropout", self.dropout, 0, 1, hi_open=True)
@@ -152,3 +149,11 @@ OLD_MEANING: dict[str, object] = {"min_epochs": 0, "forget_bias": 0.0, "forget_i
                                   "observe_drop": 0.0}
 """What the fields added with model format 2 meant before they existed: how a model saved in format 1 was
 trained (no minimum, no forget bias, no clipping, a constant learning rate)."""
+
+
+@cache
+def choices(cls: type) -> dict[str, tuple[str, ...]]:
+    """``{field: its allowed values}`` for every field of the dataclass ``cls`` typed with a ``Literal``: the
+    one table that both the config's check and the command line's ``choices`` read."""
+    hints = get_type_hints(cls)
+    return {f.name: get_args(hints[f.name]) for f in fields(cls) if getattr(hints[f.name], "__origin__", None) is Literal}

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from study import CLASSES
-from study.errors import ConfigError
+from study.core.errors import ConfigError
 
 LEVEL = 0.95
 """Coverage of every interval in the study."""

@@ -28,9 +28,9 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from study.errors import ConfigError
+from study.core.errors import ConfigError
 from study.learn import native
-from study.learn.config import CELLS
+from study.learn.config import CELLS, Cell
 from study.learn.gru import GRU
 
 # A layer's state is (h, c) for the LSTMs, h alone for the GRU; the classifier's state is whatever its
@@ -318,8 +318,12 @@ class Classifier(nn.Module):
     """
 
     def __init__(
-        self, n_inputs: int, hidden: int = 64, layers: int = 2, dropout: float = 0.2, cell: str = "peephole"
+        self, n_inputs: int, hidden: int = 64, layers: int = 2, dropout: float = 0.2, cell: Cell = "peephole",
+        forget_bias: float = 1.0, chrono_frames: int | None = None,
     ) -> None:
+        """A new classifier, its forget gates started as the paper's TensorFlow cell starts them (+1, or chrono
+        over ``chrono_frames`` frames; :meth:`init_forget_gates`): a training loop of one's own starts off the
+        plateau that a zero forget bias leaves it on."""
         super().__init__()
         if cell not in CELLS:
             raise ConfigError(f"cell = {cell!r} is not a known cell; use one of {CELLS}")
@@ -333,12 +337,14 @@ class Classifier(nn.Module):
             self.rnn = GRU(n_inputs, hidden, layers)  # nn.GRU, on the compiled loop where it can
         self.drop = nn.Dropout(dropout)
         self.head = nn.Linear(hidden, 2)
+        self.init_forget_gates(forget_bias, chrono_frames)
 
     def init_forget_gates(self, bias: float, chrono_frames: int | None = None) -> None:
         """Start the LSTMs' forget gates open: add ``bias`` to every forget-gate bias, or, with
         ``chrono_frames`` T, draw it as log U(1, T - 1) and set the input gate's to its negative (chrono
         initialisation, Tallec & Ollivier 2018: memory timescales up to the input's length). The GRU has
-        no forget gate and is left as it is. Uses torch's RNG (seeded by ``study.learn.train.fit``)."""
+        no forget gate and is left as it is. Uses torch's RNG (seeded by ``study.learn.train.fit``). Called
+        once by the constructor; calling it again adds ``bias`` again."""
         if self.cell_type == "gru":
             return
         H = self.head.in_features

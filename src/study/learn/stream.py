@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from study.errors import ConfigError, TrajectoryError
+from study.core.errors import ConfigError, TrajectoryError
 
 
 class _Layer:

@@ -26,6 +26,7 @@ import math
 import os
 import shutil
 import tempfile
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,7 +38,7 @@ import torch.nn.functional as F
 from tqdm import tqdm
 
 from study import CLASSES
-from study.errors import ConfigError, ModelError, TrajectoryError, output_error
+from study.core.errors import ConfigError, ModelError, TrajectoryError, output_error
 from study.learn import native
 from study.learn.config import (  # re-exported: train.TrainConfig
     DIMS,
@@ -45,14 +46,14 @@ from study.learn.config import (  # re-exported: train.TrainConfig
     TrainConfig,
     select_inputs,
 )
-from study.learn.metrics import metrics
+from study.learn.metrics import failed_to_train, metrics
 from study.learn.model import Classifier
 from study.simulate import observe
 from study.simulate.data import Dataset, Split
 
 SOURCES = ("learn.config", "learn.model", "learn.gru", "learn.native", "learn.train",
            *(f.relative_to(native.PACKAGE).as_posix() for f in native.FILES))
-"""The code that determines a trained model (``study.cache.source_hash`` names): part of every run's cache key."""
+"""The code that determines a trained model (``study.core.cache.source_hash`` names): part of every run's cache key."""
 THREADS = 1
 """CPU threads used by :func:`fit` (see the module docstring)."""
 
@@ -80,6 +81,32 @@ class TrainedModel:
     """The epoch whose weights were kept (lowest validation loss)."""
     diverged_epoch: int | None = None
     """The epoch in which the training loss stopped being finite, if it did (the run then stopped there)."""
+    n_val: int = 0
+    """Trajectories in the validation part it was early-stopped on (0 if unknown)."""
+
+    @property
+    def failed(self) -> bool:
+        """Whether the run failed to train by the book's criterion (``study.learn.metrics.failed_to_train``): its
+        validation accuracy cannot be told from guessing, or its validation loss never left the plateau of a
+        coin. False where the validation part's size is unknown (a model saved before it was recorded)."""
+        if not self.history or not self.n_val:
+            return False
+        acc, loss = (float(self.history[self.best_epoch][k]) for k in ("val_accuracy", "val_loss"))
+        return not (math.isfinite(acc) and math.isfinite(loss)) or failed_to_train(acc, loss, self.n_val)
+
+    def failure(self) -> str:
+        """What went wrong and what to change, in one sentence ('' for a run that trained)."""
+        if not self.failed:
+            return ""
+        best = self.history[self.best_epoch]
+        if not math.isfinite(float(best["val_loss"])):
+            return (f"the run diverged in epoch {self.diverged_epoch} (its loss stopped being finite) before it "
+                    f"learned anything; train again with a lower --lr (the protocol's is {TrainConfig().lr:g}) or "
+                    "--clip-norm 1")
+        return (f"the run failed to train: at its best epoch ({self.best_epoch}) the validation accuracy is "
+                f"{100 * float(best['val_accuracy']):.1f} % of {self.n_val} and the loss {float(best['val_loss']):.3f} "
+                f"(a coin's is {math.log(2):.3f}); it never left the initial plateau. Train again with another "
+                f"--seed, a lower --lr (the protocol's is {TrainConfig().lr:g}), more --epochs, or more data")
 
     @property
     def dims(self) -> str:
@@ -121,7 +148,7 @@ class TrainedModel:
     def save(self, out_dir: str | Path) -> Path:
         """Write the model directory atomically (a temporary directory renamed into place).
 
-        Raises :class:`study.errors.OutputError` if ``out_dir`` cannot be written.
+        Raises :class:`study.core.errors.OutputError` if ``out_dir`` cannot be written.
         """
         out = Path(out_dir)
         try:
@@ -138,7 +165,7 @@ class TrainedModel:
                                  "epochs": self.history},
                 "meta.json": {"format": FORMAT, "fps": self.fps, "data_key": self.data_key,
                               "n_frames": self.n_frames, "classes": list(CLASSES), "torch": torch.__version__,
-                              "backend": native.backend()},
+                              "backend": native.backend(), "n_val": self.n_val, "failed": self.failed},
             }
             for name, obj in texts.items():
                 (tmp / name).write_text(json.dumps(obj, indent=1) + "\n")
@@ -201,7 +228,7 @@ def load(model_dir: str | Path) -> TrainedModel:
     diverged = hist.get("diverged_epoch")
     return TrainedModel(net=net, config=cfg, fps=float(meta["fps"]), data_key=str(meta.get("data_key", "")),
                         history=list(hist.get("epochs", [])), best_epoch=int(hist.get("best_epoch", 0)),
-                        diverged_epoch=None if diverged is None else int(diverged))
+                        diverged_epoch=None if diverged is None else int(diverged), n_val=int(meta.get("n_val", 0)))
 
 
 @contextlib.contextmanager
@@ -290,8 +317,15 @@ def _inputs(x: np.ndarray, tr: np.ndarray, va: np.ndarray, cfg: TrainConfig, fps
     return views, inputs(calibrated.apply(x[va], fps, rng))
 
 
-def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedModel:
-    """Train the classifier on ``dataset.train`` with ``cfg``; early-stop on a held-out part of it."""
+class TrainingFailedWarning(UserWarning):
+    """A run ended on the initial plateau (``TrainedModel.failed``): its model answers at chance."""
+
+
+def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True, warn: bool = True) -> TrainedModel:
+    """Train the classifier on ``dataset.train`` with ``cfg``; early-stop on a held-out part of it.
+
+    A run that failed to train (``TrainedModel.failed``) says so with a :class:`TrainingFailedWarning` naming
+    what to change, unless ``warn`` is False (the experiments count such runs instead)."""
     cfg.check()
     T = cfg.n_frames(dataset.fps)
     x = select_inputs(dataset.train.x, cfg.dims, T, what="training split")  # (n, T, D)
@@ -306,8 +340,8 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedMod
     std = np.where(std > 0, std, 1.0)
 
     with deterministic(cfg.seed):
-        net = Classifier(x.shape[2], cfg.hidden, cfg.layers, cfg.dropout, cfg.cell)
-        net.init_forget_gates(cfg.forget_bias, T if cfg.forget_init == "chrono" else None)
+        net = Classifier(x.shape[2], cfg.hidden, cfg.layers, cfg.dropout, cfg.cell, forget_bias=cfg.forget_bias,
+                         chrono_frames=T if cfg.forget_init == "chrono" else None)
         net.set_scale(torch.from_numpy(std).float())
         opt = torch.optim.Adam(net.parameters(), lr=cfg.lr, foreach=True)  # one kernel per update op for all tensors
         sched = (torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=max(1, cfg.patience // 4))
@@ -348,8 +382,11 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True) -> TrainedMod
                 break
         net.load_state_dict(best_state)
         net.eval()
-    return TrainedModel(net=net, config=cfg, fps=dataset.fps, data_key=dataset.key, history=history,
-                        best_epoch=best_epoch, diverged_epoch=diverged)
+    tm = TrainedModel(net=net, config=cfg, fps=dataset.fps, data_key=dataset.key, history=history,
+                      best_epoch=best_epoch, diverged_epoch=diverged, n_val=len(va))
+    if warn and tm.failed:
+        warnings.warn(tm.failure(), TrainingFailedWarning, stacklevel=2)
+    return tm
 
 
 def evaluate(tm: TrainedModel, split: Split) -> dict[str, Any]:

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from study.errors import ConfigError, check_range
+from study.core.errors import ConfigError, check_range
 
 PRESETS: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
     "tennis": ((22, 70, 90), (50, 255, 255)),

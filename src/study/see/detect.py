@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from study.errors import TrackingError
+from study.core.errors import TrackingError
 from study.see.config import TrackConfig
 from study.see.trajectory import Trajectory
 from study.see.video import stream

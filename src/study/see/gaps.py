@@ -14,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from study.errors import TrackingError, check_range
+from study.core.errors import TrackingError, check_range
 from study.see.trajectory import Trajectory
 from study.simulate.observe import fill_runs
 
@@ -55,12 +55,12 @@ def calibrate(
     g = float(np.nanmax(traj.v[m])) if ground_v is None else float(ground_v)
     if metres_per_pixel is not None:
         check_range("metres_per_pixel", metres_per_pixel, 0.0, 100.0, lo_open=True)
-        return replace(traj, ground_v=g, scale=float(metres_per_pixel), units="m")
+        return replace(traj, ground_v=g, height_per_pixel=float(metres_per_pixel), units="m")
     if object_size is not None:
         check_range("object_size", object_size, 0.0, 100.0, lo_open=True)
         d = float(np.nanmedian(traj.diameter[traj.status == 1]))
-        return replace(traj, ground_v=g, scale=object_size / d, units="m")
-    return replace(traj, ground_v=g, scale=1.0, units="px")
+        return replace(traj, ground_v=g, height_per_pixel=object_size / d, units="m")
+    return replace(traj, ground_v=g, height_per_pixel=1.0, units="px")
 
 
 def resample(traj: Trajectory, fps: float) -> Trajectory:

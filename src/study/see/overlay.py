@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from study.errors import ConfigError
+from study.core.errors import ConfigError
 from study.see.trajectory import Trajectory
 from study.see.video import atomic_writer, frames, probe
 

@@ -22,8 +22,8 @@ import mujoco  # MUJOCO_GL's default (egl) is set in study/__init__.py, before a
 import numpy as np
 from tqdm import tqdm
 
-from study.cache import write_text_atomic
-from study.errors import ConfigError, RenderError, check_range
+from study.core.cache import write_text_atomic
+from study.core.errors import ConfigError, RenderError, check_range
 from study.see.video import atomic_writer
 from study.simulate import synth
 from study.simulate.scene import Shape
@@ -35,10 +35,10 @@ CLASS_PARAMS: dict[str, dict[str, float]] = {
 """Physically sensible defaults per class for :func:`class_model` (kg, 1/s, dimensionless).
 Damping 100 with stiffness 2.5e5 gives a bouncy contact (restitution about 0.7), 400 a dull one."""
 
-STIFFNESS = 2.5e5
-"""Contact stiffness k of the direct solref format, 1/s^2."""
-TIMESTEP = 1 / 1800
-"""Simulation step, seconds; divides the frame period of 30 and 60 fps video."""
+STIFFNESS = synth.SynthConfig.stiffness
+"""Contact stiffness k of the direct solref format, 1/s^2: synthesis's."""
+TIMESTEP = synth.SynthConfig.timestep
+"""Simulation step, seconds: synthesis's (it divides the frame period of 30 and 60 fps video)."""
 OBJECT_RGBA = (0.9, 0.35, 0.05, 1.0)
 """The object's paint: a saturated orange the 'orange' tracker preset finds (hue about 10 of 180)."""
 SLEEP_TOLERANCE = synth.SynthConfig.sleep_tolerance
@@ -151,11 +151,7 @@ def simulate(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray, n_steps:
     data = mujoco.MjData(model)
     data.qpos[:] = qpos
     data.qvel[:] = qvel
-    out = np.empty((n_steps + 1, model.nq))
-    out[0] = data.qpos
-    for i in range(n_steps):
-        mujoco.mj_step(model, data)
-        out[i + 1] = data.qpos
+    out = synth.step_states(model, data, n_steps)
     if not np.isfinite(out).all():
         raise ConfigError("the simulation diverged (NaN state); use a smaller timestep or a softer contact")
     return out
@@ -297,10 +293,8 @@ def synth_model(cfg, params: dict[str, np.ndarray], i: int) -> tuple[mujoco.MjMo
     friction, qpos0, qvel0). The velocity is staggered exactly as synthesis does, so the rendered
     motion is the dataset's trajectory.
     """
-    from study.simulate import synth
-
-    model = synth.build_model(cfg, float(params["mass"][i]), float(params["damping"][i]), float(params["friction"][i]))
-    return model, np.asarray(params["qpos0"][i], float), synth.staggered_qvel(params["qvel0"][i], cfg.timestep)
+    model, data = synth.initial_data(cfg, params, i)
+    return model, data.qpos.copy(), data.qvel.copy()
 
 
 def framing_camera(path: np.ndarray, fovy: float = 45.0) -> mujoco.MjvCamera:

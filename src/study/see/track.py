@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from study.errors import TrajectoryError, check_range
+from study.core.errors import TrajectoryError, check_range
 from study.see.config import PRESETS, TrackConfig, parse_hsv
 from study.see.detect import detect_all
 from study.see.gaps import calibrate, fill_gaps, resample
@@ -46,20 +46,20 @@ def to_model_input(
     traj: Trajectory,
     fps: float,
     n_frames: int,
-    scale: float | None = None,
+    height_factor: float = 1.0,
     rest_height: float = 0.0,
 ) -> np.ndarray:
     """The classifier's input for one video: (n_frames, 3) float32, world x, y, z in metres.
 
-    The longest piece of ``traj`` is resampled to ``fps``, its height (times ``scale``, metres per
-    unit of :attr:`Trajectory.height`; default 1, i.e. the trajectory's own units) plus
+    The longest piece of ``traj`` is resampled to ``fps``, its height (in the trajectory's own units, times
+    ``height_factor``: a wrong pixel scale, to measure how much a label depends on it) plus
     ``rest_height`` (the centre's height at rest, metres) becomes z; a single camera gives no depth,
     so x and y are zero. Longer pieces are cut to ``n_frames``, shorter ones zero-padded at the end
     (the paper's padding).
     """
     check_range("n_frames", n_frames, 1, 1e7)
     r = resample(traj, fps)
-    z = r.height * (1.0 if scale is None else scale) + rest_height
+    z = r.height * height_factor + rest_height
     if not np.isfinite(z).all():
         raise TrajectoryError(f"{traj.source}: the height series has NaN after resampling")
     out = np.zeros((n_frames, 3), np.float32)

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from study.cache import write_text_atomic
-from study.errors import TrajectoryError, check_file
+from study.core.cache import write_text_atomic
+from study.core.errors import TrajectoryError, check_file
 from study.see.trajectory import STATUS, Trajectory
 
 COLUMNS = ("frame", "t_s", "u_px", "v_px", "height", "status", "segment", "confidence")
@@ -52,18 +52,18 @@ def read_csv(path: str | Path) -> Trajectory:
     if len(t) < 2:
         raise TrajectoryError(f"trajectory CSV {p}: fewer than two rows")
     fps = 1.0 / float(np.median(np.diff(t)))
-    # height = (ground - v) * scale: recover ground and scale from two rows with different v.
+    # height = (ground - v) * per_pixel: recover both from two rows with different v.
     ok = np.isfinite(v) & np.isfinite(h)
     if ok.sum() >= 2 and np.ptp(v[ok]) > 0:
-        scale, ground = _fit_height(v[ok], h[ok])
+        per_pixel, ground = _fit_height(v[ok], h[ok])
     else:
-        scale, ground = 1.0, float(np.nanmax(v)) if ok.any() else math.nan
+        per_pixel, ground = 1.0, float(np.nanmax(v)) if ok.any() else math.nan
     return Trajectory(t=t, u=u, v=v, status=status, segment=seg, confidence=conf,
-                      diameter=np.full(len(t), np.nan), fps=fps, source=p, ground_v=ground, scale=scale, units=units)
+                      diameter=np.full(len(t), np.nan), fps=fps, source=p, ground_v=ground, height_per_pixel=per_pixel, units=units)
 
 
 def _fit_height(v: np.ndarray, h: np.ndarray) -> tuple[float, float]:
-    """(scale, ground_v) with h = (ground_v - v) * scale, least squares."""
+    """(per_pixel, ground_v) with h = (ground_v - v) * per_pixel, least squares."""
     A = np.stack([-v, np.ones_like(v)], axis=1)
     (s, c), *_ = np.linalg.lstsq(A, h, rcond=None)
     return float(s), float(c / s)

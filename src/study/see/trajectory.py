@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from study.errors import TrackingError
+from study.core.errors import TrackingError
 
 STATUS = ("missing", "measured", "filled")
 """Per-frame status codes of a :class:`Trajectory` (index = code)."""
@@ -46,8 +46,8 @@ class Trajectory:
     """Frame height of the source, pixels."""
     ground_v: float = math.nan
     """Image row of the object's centre at ground level, pixels."""
-    scale: float = 1.0
-    """Metres per pixel of :attr:`height` (1.0 with ``units`` 'px': height in pixels)."""
+    height_per_pixel: float = 1.0
+    """Units of :attr:`height` per image pixel: metres per pixel with ``units`` 'm', 1.0 with 'px'."""
     units: str = "px"
     """Units of :attr:`height`: 'px' or 'm'."""
 
@@ -69,7 +69,7 @@ class Trajectory:
     @property
     def height(self) -> np.ndarray:
         """(n,) float64, height of the centre above the ground row, up positive, in :attr:`units`."""
-        return (self.ground_v - self.v) * self.scale
+        return (self.ground_v - self.v) * self.height_per_pixel
 
     def segments(self) -> list[Trajectory]:
         """The pieces between long gaps, each a :class:`Trajectory` without missing rows, in time order."""

@@ -16,7 +16,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from study.errors import VideoError, check_writable
+from study.core.errors import VideoError, check_writable
 
 TRUNCATED_FRACTION = 0.9
 """A video that decodes fewer than this fraction of the frames its container lists is truncated."""

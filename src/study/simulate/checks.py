@@ -18,6 +18,7 @@ from study.simulate.synth import (
     GRAVITY,
     SynthConfig,
     build_model,
+    initial_data,
     simulate,
     staggered_qvel,
 )
@@ -90,10 +91,7 @@ class Trace:
 
 def trace(cfg: SynthConfig, params: dict[str, np.ndarray], i: int, duration: float | None = None) -> Trace:
     """Simulate trajectory ``i`` of a split's ``params`` step by step and record diagnostics."""
-    m = build_model(cfg, params["mass"][i], params["damping"][i], params["friction"][i])
-    d = mujoco.MjData(m)
-    d.qpos[:] = params["qpos0"][i]
-    d.qvel[:] = staggered_qvel(params["qvel0"][i], m.opt.timestep)
+    m, d = initial_data(cfg, params, i)
     n = int(round((duration or cfg.duration) / m.opt.timestep))
     mass, inertia = float(m.body_mass[1]), m.body_inertia[1].copy()
     t, pos, speed = np.empty(n), np.empty((n, 3)), np.empty(n)

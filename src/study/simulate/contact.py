@@ -23,7 +23,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from study.errors import ConfigError
+from study.core.errors import ConfigError
 from study.simulate.scene import Shape, compile_scene
 
 CALIBRATION_DROP = 1.0

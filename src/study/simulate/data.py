@@ -2,7 +2,7 @@
 
 A dataset file holds the arrays of both splits plus a JSON header with the config that made it, the
 seed, the library versions, the cache key and a SHA-256 checksum of every array. :func:`load` checks
-all of that and raises :class:`study.errors.DataError` naming the file and the fault.
+all of that and raises :class:`study.core.errors.DataError` naming the file and the fault.
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 
 from study import CLASSES
-from study.cache import array_checksum, atomic_path
-from study.errors import DataError, check_file
+from study.core.cache import array_checksum, atomic_path
+from study.core.errors import DataError, check_file
 
 FORMAT = "study.dataset/1"
 SPLITS = ("train", "test")

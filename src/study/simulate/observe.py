@@ -22,10 +22,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
-from study.errors import ConfigError, TrajectoryError, check_range
+from study.core.errors import ConfigError, TrajectoryError, check_range
 
 Z = 2
 """Column of the height in a trajectory."""
@@ -155,7 +156,7 @@ class Camera:
         check_range("Camera.rows", self.rows, 16, 100_000)
 
 
-def across_view(x: np.ndarray) -> np.ndarray:
+def turned_across_view(x: np.ndarray) -> np.ndarray:
     """Each trajectory of ``x`` (n, T, 3) turned about the vertical through its first point so that its
     overall horizontal travel (last point minus first) points along +x, across a camera looking along +y."""
     x = np.array(x, dtype=np.float64, copy=True)
@@ -177,9 +178,9 @@ def perspective(x: np.ndarray, camera: Camera, rest_height: float = 0.1) -> np.n
     apparent size at its median depth. So an object moving towards or away from the camera, or one seen
     from above, has its height distorted as on video; ``rest_height`` is added back, as the tracker does.
     Each throw is first turned about the vertical through its launch point so that it crosses the
-    camera's view (:func:`across_view`), as the rendered videos are filmed.
+    camera's view (:func:`turned_across_view`), as the rendered videos are filmed.
     """
-    x = across_view(_check(x))
+    x = turned_across_view(_check(x))
     camera.validate()
     e = math.radians(camera.elevation)
     back = np.array([0.0, -math.cos(e), math.sin(e)])  # from the aim point towards the camera
@@ -225,7 +226,7 @@ class Observation:
     """Camera frame rate, frames per second; None: the data's own."""
     camera: Camera | None = None
     """The camera whose perspective turns image rows into heights; None: heights as simulated."""
-    scale: float = 1.0
+    height_factor: float = 1.0
     """Factor on every height above the resting height (an error in the pixel scale)."""
     max_gap: int = 6
     """Longest gap the tracker fills, frames (``study.see.config.TrackConfig.max_gap``)."""
@@ -233,7 +234,7 @@ class Observation:
     def validate(self) -> None:
         check_range("Observation.noise (metres)", self.noise, 0.0, 10.0)
         check_range("Observation.drop", self.drop, 0.0, 1.0, hi_open=True)
-        check_range("Observation.scale", self.scale, 0.0, 100.0, lo_open=True)
+        check_range("Observation.height_factor", self.height_factor, 0.0, 100.0, lo_open=True)
         if self.camera_fps is not None:
             check_range("Observation.camera_fps", self.camera_fps, 1.0, 10_000.0)
         if self.camera is not None:
@@ -253,9 +254,22 @@ class Observation:
             y = noise(y, self.noise, rng)
         if self.drop > 0:
             y = drop(y, self.drop, rng, self.max_gap)
-        if self.scale != 1.0:
-            y = height_scale(y, self.scale, rest_height)
+        if self.height_factor != 1.0:
+            y = height_scale(y, self.height_factor, rest_height)
         return y
+
+    def observe(self, x: np.ndarray, fps: float, seed: int, frames: int | None = None,
+                rest_height: float = 0.1) -> np.ndarray:
+        """``x`` (n, T, 3) metres as observed (:meth:`apply`), drawn from a generator seeded by ``seed``, cut
+        to its first ``frames`` frames (all if None): (n, frames, 3) metres."""
+        y = self.apply(x, fps, np.random.default_rng(seed), rest_height=rest_height)
+        return y[:, :frames] if frames else y
+
+    def replace(self, **changes: Any) -> Observation:
+        """This observation with ``changes`` applied (a sweep's point), validated."""
+        new = replace(self, **changes)
+        new.validate()
+        return new
 
 
 @dataclass(frozen=True)
@@ -272,7 +286,7 @@ class Randomisation:
     """Camera distance, metres."""
     elevation: tuple[float, float] = (0.0, 30.0)
     """Camera elevation, degrees."""
-    scale: tuple[float, float] = (0.8, 1.25)
+    height_factor: tuple[float, float] = (0.8, 1.25)
     """Height-scale factor, log-uniform."""
 
 
@@ -287,14 +301,7 @@ def randomised(x: np.ndarray, fps: float, rng: np.random.Generator, ranges: Rand
             noise=float(rng.uniform(*ranges.noise)), drop=float(rng.uniform(*ranges.drop)),
             camera_fps=float(rng.choice(ranges.camera_fps)),
             camera=Camera(distance=float(rng.uniform(*ranges.distance)), elevation=float(rng.uniform(*ranges.elevation))),
-            scale=float(np.exp(rng.uniform(*np.log(ranges.scale)))),
+            height_factor=float(np.exp(rng.uniform(*np.log(ranges.height_factor)))),
         )
         out[i] = ob.apply(x[i : i + 1], fps, rng, rest_height=rest_height)[0]
     return out
-
-
-def observed(ob: Observation, **changes: float) -> Observation:
-    """``ob`` with ``changes`` applied (a sweep's point), validated."""
-    new = replace(ob, **changes)
-    new.validate()
-    return new

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import mujoco
 
-from study.errors import ConfigError, check_range
+from study.core.errors import ConfigError, check_range
 
 SHAPES = ("box", "sphere", "cylinder")
 

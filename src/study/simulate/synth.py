@@ -26,9 +26,10 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from study import CLASSES, __version__, cache, presets
-from study.errors import ConfigError, check_range
-from study.progress import Progress
+from study import CLASSES, __version__
+from study.core import cache, presets
+from study.core.errors import ConfigError, check_range
+from study.core.progress import Progress
 from study.simulate import data
 from study.simulate.contact import (
     damping_for_restitution,
@@ -138,7 +139,7 @@ class SynthConfig:
 
     @classmethod
     def preset(cls, name: str) -> SynthConfig:
-        """The config of a preset (``study.presets``): ``'paper'``, the paper's size (1000 train + 1000
+        """The config of a preset (``study.core.presets``): ``'paper'``, the paper's size (1000 train + 1000
         test per class, 10 s); ``'smoke'``, a few short throws."""
         return {"smoke": cls(n_train=8, n_test=8, duration=3.0), "paper": cls()}[presets.check(name)]
 
@@ -316,10 +317,6 @@ def build_model(cfg: SynthConfig, mass: float, damping: float, friction: float) 
     )
 
 
-def _models(cfg: SynthConfig, params: dict[str, np.ndarray], idx: range) -> list[mujoco.MjModel]:
-    return [build_model(cfg, params["mass"][i], params["damping"][i], params["friction"][i]) for i in idx]
-
-
 def staggered_qvel(qvel: np.ndarray, timestep: float) -> np.ndarray:
     """The velocity to give MuJoCo so that free flight follows the launch's exact parabola.
 
@@ -333,13 +330,32 @@ def staggered_qvel(qvel: np.ndarray, timestep: float) -> np.ndarray:
     return out
 
 
-def _initial_states(models: list[mujoco.MjModel], qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
-    """(n, nstate) full physics states (time 0) for the launch states."""
-    states = np.empty((len(models), mujoco.mj_stateSize(models[0], STATE)))
-    for i, m in enumerate(models):
-        d = mujoco.MjData(m)
-        d.qpos[:] = qpos[i]
-        d.qvel[:] = staggered_qvel(qvel[i], m.opt.timestep)
+def initial_data(cfg: SynthConfig, params: dict[str, np.ndarray], i: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """Throw ``i`` of a split's ``params`` ready to step: its compiled scene and an ``MjData`` at the launch
+    (qpos as sampled, qvel staggered by :func:`staggered_qvel`). Synthesis, the physics checks and the
+    renders all start a throw here."""
+    m = build_model(cfg, params["mass"][i], params["damping"][i], params["friction"][i])
+    d = mujoco.MjData(m)
+    d.qpos[:] = params["qpos0"][i]
+    d.qvel[:] = staggered_qvel(params["qvel0"][i], m.opt.timestep)
+    return m, d
+
+
+def step_states(model: mujoco.MjModel, data: mujoco.MjData, n_steps: int) -> np.ndarray:
+    """Step ``data`` ``n_steps`` times with ``mj_step``: (n_steps + 1, nq) float64 positions, the first the
+    initial one. The plain loop that the batched rollout is checked against."""
+    out = np.empty((n_steps + 1, model.nq))
+    out[0] = data.qpos
+    for k in range(n_steps):
+        mujoco.mj_step(model, data)
+        out[k + 1] = data.qpos
+    return out
+
+
+def _initial_states(pairs: list[tuple[mujoco.MjModel, mujoco.MjData]]) -> np.ndarray:
+    """(n, nstate) full physics states (time 0) of the throws set up by :func:`initial_data`."""
+    states = np.empty((len(pairs), mujoco.mj_stateSize(pairs[0][0], STATE)))
+    for i, (m, d) in enumerate(pairs):
         mujoco.mj_getState(m, d, states[i], STATE)
     return states
 
@@ -384,9 +400,10 @@ def simulate(
         desc, total=n, show=progress, unit="traj"
     ) as bar:
         for idx in _chunks(n, chunk):
-            models = _models(cfg, params, idx)
+            pairs = [initial_data(cfg, params, i) for i in idx]
+            models = [m for m, _ in pairs]
             datas = [mujoco.MjData(models[0]) for _ in range(max(threads, 1))]
-            initial = _initial_states(models, params["qpos0"][idx], params["qvel0"][idx])
+            initial = _initial_states(pairs)
             states, _ = pool.rollout(models, datas, initial, nstep=nstep)
             out[idx.start : idx.stop] = _frames(cfg, initial, states)
             bar.update(len(idx))
@@ -397,16 +414,10 @@ def simulate_reference(cfg: SynthConfig, params: dict[str, np.ndarray]) -> np.nd
     """The same as :func:`simulate`, as a plain Python loop of ``mj_step``: the reference for tests."""
     n = len(params["mass"])
     out = np.empty((n, cfg.n_frames, 3))
+    spf = cfg.steps_per_frame
     for i in range(n):
-        m = build_model(cfg, params["mass"][i], params["damping"][i], params["friction"][i])
-        d = mujoco.MjData(m)
-        d.qpos[:] = params["qpos0"][i]
-        d.qvel[:] = staggered_qvel(params["qvel0"][i], m.opt.timestep)
-        out[i, 0] = d.qpos[:3]
-        for k in range(1, cfg.n_frames):
-            for _ in range(cfg.steps_per_frame):
-                mujoco.mj_step(m, d)
-            out[i, k] = d.qpos[:3]
+        states = step_states(*initial_data(cfg, params, i), (cfg.n_frames - 1) * spf)
+        out[i] = states[::spf, :3]
     return out
 
 

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from study.errors import ConfigError
+from study.core.errors import ConfigError
 from study.learn.metrics import Interval, wilson
 
 

@@ -1,21 +1,16 @@
 """One matplotlib style for the whole book: colour-blind-safe colours, units on axes, stable files.
 
-Chapters call :func:`use_style` once, colour the two classes with :data:`CLASS_COLORS`, and write
-figure files with :func:`save`, which gives the same bytes for the same figure (no dates, no random
-SVG ids), so a re-run that changed nothing changes no file. Nothing here selects a GUI backend: it
+Chapters call :func:`use_style` once and colour the two classes with :data:`CLASS_COLORS`; the style fixes
+the font and the SVG ids, so the same figure gives the same image. Nothing here selects a GUI backend: it
 works under Agg (scripts, tests) and under the notebook's inline backend alike.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import matplotlib as mpl
 from matplotlib.figure import Figure
-
-from study.cache import atomic_path
-from study.errors import ConfigError
 
 # Okabe & Ito (2008), "Color Universal Design": distinguishable with every common colour deficiency.
 OKABE_ITO: dict[str, str] = {
@@ -60,34 +55,9 @@ STYLE: dict[str, Any] = {
 }
 """The rcParams every figure of the book is drawn with."""
 
-_FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
-# Metadata keys that would otherwise carry the date or the library version into the file.
-_METADATA: dict[str, dict[str, Any]] = {
-    "png": {"Software": None},
-    "svg": {"Date": None, "Creator": None},
-    "pdf": {"CreationDate": None, "ModDate": None, "Producer": None, "Creator": None},
-}
-
-
 def use_style() -> None:
     """Apply :data:`STYLE` to matplotlib's global rcParams (call once at the top of a chapter)."""
     mpl.rcParams.update(STYLE)
-
-
-def save(fig: Figure, path: str | Path, dpi: float | None = None) -> Path:
-    """Write ``fig`` to ``path`` (.png, .svg or .pdf) atomically, with no date or version inside.
-
-    The same figure drawn by the same library versions gives the same bytes. ``dpi`` defaults to the
-    style's ``savefig.dpi`` (150). Returns ``path`` as a :class:`Path`.
-    """
-    target = Path(path)
-    fmt = _FORMATS.get(target.suffix.lower())
-    if fmt is None:
-        raise ConfigError(f"figure file {target}: unknown suffix {target.suffix!r}; use one of {sorted(_FORMATS)}")
-    with mpl.rc_context({"svg.hashsalt": STYLE["svg.hashsalt"], "svg.fonttype": STYLE["svg.fonttype"]}):
-        with atomic_path(target) as tmp:
-            fig.savefig(tmp, format=fmt, dpi=dpi or STYLE["savefig.dpi"], metadata=_METADATA[fmt])
-    return target
 
 
 DIMS_NAMES = {"xyz": "X, Y, Z", "z": "Z only"}
@@ -133,7 +103,7 @@ def accuracy_vs_length(summary: list[dict], rows: list[dict], long_summary: list
 
 
 def robustness_curves(curves: list[dict], sweeps: dict, marks: dict, groups: list[str]) -> Figure:
-    """One panel per sweep of ``study.cues.robustness``: accuracy (mean, 95 % band) of each model group
+    """One panel per sweep of ``study.experiments.cues.robustness``: accuracy (mean, 95 % band) of each model group
     against the sweep's values, a dotted line at ``marks[sweep]`` (the calibrated or exact value)."""
     import matplotlib.pyplot as plt
 
@@ -156,7 +126,7 @@ def robustness_curves(curves: list[dict], sweeps: dict, marks: dict, groups: lis
 
 
 def accuracy_by_parameter(curves: dict[tuple[str, str], list[dict]], names: tuple[str, ...]) -> Figure:
-    """Accuracy against each throw parameter (``study.cues.by_parameter`` rows under ``curves[(name, dims)]``),
+    """Accuracy against each throw parameter (``study.experiments.cues.by_parameter`` rows under ``curves[(name, dims)]``),
     one panel per parameter, a line per class and input (solid X, Y, Z; dashed Z)."""
     import matplotlib.pyplot as plt
 

@@ -6,7 +6,7 @@ checks its names against :data:`NAMES` (tested), so a new preset is added here f
 
 from __future__ import annotations
 
-from study.errors import ConfigError
+from study.core.errors import ConfigError
 
 NAMES: tuple[str, ...] = ("smoke", "paper")
 """Every preset, smallest first."""

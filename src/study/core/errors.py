@@ -7,7 +7,10 @@ with status 2.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import shutil
+from collections.abc import Iterator
 from pathlib import Path
 
 
@@ -116,3 +119,30 @@ def check_writable(path: str | Path, what: str = "output") -> Path:
     if target.is_dir():
         raise OutputError(f"{what} {target}: is a folder; give a file name")
     return target
+
+
+def _first_missing(path: Path) -> Path | None:
+    """The topmost of ``path`` and its ancestors that does not exist yet (what writing ``path`` would create)."""
+    missing = None
+    for p in (path, *path.parents):
+        if p.exists() or p.is_symlink():
+            break
+        missing = p
+    return missing
+
+
+@contextlib.contextmanager
+def removed_on_error(*paths: str | Path | None) -> Iterator[None]:
+    """Run the block; if it raises, remove whatever it created of ``paths`` (and of their missing parent
+    folders): a command that fails leaves nothing behind. What existed before is never touched."""
+    created = [m for p in paths if p is not None and (m := _first_missing(Path(p).absolute())) is not None]
+    try:
+        yield
+    except BaseException:
+        for m in created:
+            if m.is_dir() and not m.is_symlink():
+                shutil.rmtree(m, ignore_errors=True)
+            else:
+                with contextlib.suppress(OSError):  # nothing there, or a path under a file
+                    m.unlink()
+        raise

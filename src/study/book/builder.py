@@ -33,11 +33,18 @@ import yaml
 from tqdm import tqdm
 
 import study
-from study import nbtidy, presets, results
-from study.cache import canonical_json, key, source_hash, write_text_atomic
-from study.errors import ChapterError, ConfigError, check_writable
-from study.progress import ENV as PROGRESS_ENV
-from study.progress import Follower
+from study.book import nbtidy, results
+from study.core import presets
+from study.core.cache import canonical_json, key, source_hash, write_text_atomic
+from study.core.errors import ChapterError, ConfigError, check_writable
+from study.core.progress import ENV as PROGRESS_ENV
+from study.core.progress import Follower
+
+PLAN_ENV = "STUDY_PLAN_PART"
+"""Environment variable naming the file a chapter lists its training runs in (``study.experiments.runs.Plan``)."""
+RUNTIME = ("scheduler",)
+"""Parameters that say where a chapter's work runs, not what it computes: injected into the chapters that
+declare them, and left out of every chapter's cache key."""
 
 EXECUTED = Path("_build/executed")
 """Where executed copies (and the staged book sources) go, relative to the root."""
@@ -76,8 +83,13 @@ class Chapter:
 
     @property
     def results_part(self) -> Path:
-        """The numbers this chapter reported in its last run (``study.results``)."""
+        """The numbers this chapter reported in its last run (``study.book.results``)."""
         return self.root / EXECUTED / "results" / f"{self.entry}.json"
+
+    @property
+    def plan_part(self) -> Path:
+        """The training runs this chapter asked for in its last run (``study.experiments.runs.Plan``)."""
+        return self.root / EXECUTED / "plans" / f"{self.entry}.jsonl"
 
     @property
     def failed(self) -> Path:
@@ -205,10 +217,11 @@ def inputs_fingerprint(root: Path, parameters: dict[str, Any]) -> dict[str, Any]
 
 
 @contextlib.contextmanager
-def _kernel_environment(progress: Path | None = None, results_part: Path | None = None) -> Iterator[None]:
+def _kernel_environment(progress: Path | None = None, results_part: Path | None = None,
+                        plan_part: Path | None = None) -> Iterator[None]:
     """Environment the kernel inherits: headless MuJoCo, fixed hash seed, the inline matplotlib backend, the
-    progress file (:mod:`study.progress`), the chapter's results part (:mod:`study.results`), and this
-    very ``study``."""
+    progress file (:mod:`study.core.progress`), the chapter's results part (:mod:`study.book.results`) and plan
+    part (:data:`PLAN_ENV`), and this very ``study``."""
     saved = dict(os.environ)
     os.environ.setdefault("MUJOCO_GL", "egl")
     os.environ["PYTHONHASHSEED"] = "0"
@@ -222,6 +235,8 @@ def _kernel_environment(progress: Path | None = None, results_part: Path | None 
         os.environ[PROGRESS_ENV] = str(progress)
     if results_part is not None:
         os.environ[results.ENV] = str(results_part)
+    if plan_part is not None:
+        os.environ[PLAN_ENV] = str(plan_part)
     try:
         yield
     finally:
@@ -290,8 +305,10 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
     running.parent.mkdir(parents=True, exist_ok=True)
     follow = running.with_suffix(".progress")
     ch.results_part.unlink(missing_ok=True)  # written afresh by this run, or not at all
+    ch.plan_part.unlink(missing_ok=True)
+    ch.plan_part.parent.mkdir(parents=True, exist_ok=True)
     try:
-        with _kernel_environment(follow, ch.results_part), Follower(follow, ch.stem):
+        with _kernel_environment(follow, ch.results_part, ch.plan_part), Follower(follow, ch.stem):
             papermill.execute_notebook(
                 str(source_nb),
                 str(running),
@@ -332,6 +349,7 @@ def _keep_failed(ch: Chapter, running: Path) -> None:
     ch.executed.unlink(missing_ok=True)
     ch.key_file.unlink(missing_ok=True)
     ch.results_part.unlink(missing_ok=True)
+    ch.plan_part.unlink(missing_ok=True)
     ch.failed.parent.mkdir(parents=True, exist_ok=True)
     if running.exists():
         os.replace(running, ch.failed)
@@ -368,14 +386,18 @@ def _decide(ch: Chapter, current: str, force: bool, only: list[str] | None) -> t
     return "execute", stored
 
 
-def execute(root: Path, preset: str, force: bool = False, only: list[str] | None = None) -> dict[str, dict[str, Any]]:
+def execute(root: Path, preset: str, force: bool = False, only: list[str] | None = None,
+            scheduler: str = "") -> dict[str, dict[str, Any]]:
     """Execute (or reuse) every chapter of ``root``'s book; returns {stem: {"seconds", "cached", ...}}.
 
     ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, keeping the others'
-    current copies, but a chapter that has no executed copy at all is always executed. Stops at the
-    first failing chapter with :class:`ChapterError`. Also writes ``_build/executed/timings.json`` and merges
-    the chapters' numbers into ``_build/results.json`` (:mod:`study.results`): before the chapters that run
-    last (:func:`_runs_last`, such as a summary that reads them) and again at the end.
+    current copies, but a chapter that has no executed copy at all is always executed. ``scheduler`` (a
+    Dask scheduler's address) is handed to every chapter with a ``scheduler`` parameter, outside its cache
+    key. Stops at the first failing chapter with :class:`ChapterError`. Also writes
+    ``_build/executed/timings.json`` (with the models the book's chapters train and their CPU time,
+    :func:`plan_totals`) and merges the chapters' numbers into ``_build/results.json``
+    (:mod:`study.book.results`): before the chapters that run last (:func:`_runs_last`, such as a summary that
+    reads them) and again at the end.
     """
     import nbformat
 
@@ -406,6 +428,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                 probe = Path(tmp) / f"{ch.stem}.ipynb"
                 nbformat.write(nb, probe)
                 parameters = notebook_parameters(probe, injected)
+                runtime = {k: v for k, v in {"scheduler": scheduler}.items() if v and k in parameters}
+                parameters = {k: v for k, v in parameters.items() if k not in RUNTIME}
                 base = {
                     "chapter": hashlib.sha256(ch.source.read_bytes()).hexdigest(),
                     "injected": canonical_json(injected),
@@ -423,7 +447,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                 tqdm.write(f"{where}: executing", file=sys.stderr)
                 t0 = time.perf_counter()
                 try:
-                    _execute(ch, probe, nb, injected, root)
+                    _execute(ch, probe, nb, injected | runtime, root)
                 except ChapterError:
                     timings[ch.stem] = {"seconds": round(time.perf_counter() - t0, 3), "cached": False, "failed": True}
                     raise
@@ -437,10 +461,18 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         for ch, base, parameters, seconds in done:
             _write_key(ch, base, parameters, root, seconds)
         if timings:
-            record = {"preset": preset, "chapters": timings}
+            record = {"preset": preset, "chapters": timings, "runs": plan_totals(root)}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
             results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
+
+
+def plan_totals(root: Path) -> dict[str, float]:
+    """The distinct models the book's chapters train (``models``) and the CPU seconds their records took
+    (``train_seconds``), from each chapter's plan part (``study.experiments.runs.plan_totals``)."""
+    from study.experiments.runs import plan_totals as totals
+
+    return totals([ch.plan_part for ch in chapters(root)])
 
 
 def _duration(seconds: float) -> str:
@@ -450,8 +482,9 @@ def _duration(seconds: float) -> str:
     return f"{whole // 60} min {whole % 60} s"
 
 
-def summary(timings: dict[str, dict[str, Any]]) -> str:
-    """The table :func:`build` prints at the end: each chapter, whether it ran, and how long it took."""
+def summary(timings: dict[str, dict[str, Any]], runs: dict[str, float] | None = None) -> str:
+    """The table :func:`build` prints at the end: each chapter, whether it ran, and how long it took; with
+    ``runs`` (:func:`plan_totals`), how many models the book trains and their CPU time."""
     width = max(len(s) for s in timings)
     lines = []
     for stem, t in timings.items():
@@ -465,7 +498,28 @@ def summary(timings: dict[str, dict[str, Any]]) -> str:
             what = f"executed in {_duration(t['seconds'])}"
         lines.append(f"  {stem:<{width}}  {what}")
     ran = sum(t["seconds"] for t in timings.values() if not t["cached"])
-    return "\n".join(["chapters:", *lines, f"  {'total':<{width}}  {_duration(ran)} executing this time"])
+    lines = ["chapters:", *lines, f"  {'total':<{width}}  {_duration(ran)} executing this time"]
+    if runs and runs.get("models"):
+        lines.append(f"runs: {int(runs['models'])} models, {_duration(runs['train_seconds'])} of training (one CPU "
+                     "each, summed from their records)")
+    return "\n".join(lines)
+
+
+@contextlib.contextmanager
+def _cluster(scheduler: str) -> Iterator[str]:
+    """The scheduler address the chapters get: a ``LocalCluster`` started for this build when ``scheduler`` is
+    'local' (closed at the end), else ``scheduler`` as it is."""
+    if scheduler != "local":
+        yield scheduler
+        return
+    from distributed import LocalCluster
+
+    from study.experiments.runs import default_workers
+
+    with LocalCluster(n_workers=default_workers(), threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        tqdm.write(f"dask: a LocalCluster of {default_workers()} workers at {cluster.scheduler_address}", file=sys.stderr)
+        yield cluster.scheduler_address
 
 
 def _stage(root: Path) -> Path:
@@ -516,19 +570,23 @@ def render(root: Path) -> Path:
     return root / "_build" / "html"
 
 
-def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bool) -> None:
+def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bool, scheduler: str = "") -> None:
     """Execute the chapters of the book at ``root`` with ``preset`` (cached), then, if ``html``, render it.
 
-    The executed copies land in ``<root>/_build/executed/book/``, their timings in
-    ``_build/executed/timings.json``, and the HTML in ``<root>/_build/html``.
+    ``scheduler``: '' trains on a local process pool in each chapter; 'local' starts one Dask
+    ``LocalCluster`` for the whole build (loopback only, one single-threaded worker per core); anything
+    else is the address of a Dask scheduler every chapter's runs are sent to. The executed copies land in
+    ``<root>/_build/executed/book/``, their timings in ``_build/executed/timings.json``, and the HTML in
+    ``<root>/_build/html``.
     """
     presets.check(preset)
     root = Path(root).resolve()
     if not root.is_dir():
         raise ConfigError(f"--root {root}: no such folder")
     check_writable(root / EXECUTED / "timings.json", "book output folder")
-    timings = execute(root, preset, force=force, only=only)
-    print(summary(timings), file=sys.stderr)
+    with _cluster(scheduler) as address:
+        timings = execute(root, preset, force=force, only=only, scheduler=address)
+    print(summary(timings, plan_totals(root)), file=sys.stderr)
     if html:
         index = render(root) / "index.html"
         print(f"the book: {index}", file=sys.stderr)

@@ -23,11 +23,12 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from study import CLASSES, cache
+from study import CLASSES
+from study.core import cache
 from study.simulate import measure
-from study.errors import ConfigError, DataError, StudyError
+from study.core.errors import ConfigError, DataError, StudyError
 from study.learn.metrics import Interval, wilson
-from study.progress import Progress
+from study.core.progress import Progress
 from study.see import render, track
 
 LABEL_ALIASES = {"light": "light", "bouncy": "light", "ball": "light", "heavy": "heavy", "sliding": "heavy", "cube": "heavy"}
@@ -111,7 +112,7 @@ def read_manifest(video_dir: str | Path, color: str = "tennis", object_size: flo
     return sorted(out, key=lambda v: v.path.name)
 
 
-def across_view(qpos: np.ndarray, qvel: np.ndarray, start_x: float = 1.2) -> tuple[np.ndarray, np.ndarray]:
+def launch_across_view(qpos: np.ndarray, qvel: np.ndarray, start_x: float = 1.2) -> tuple[np.ndarray, np.ndarray]:
     """A launch turned to cross the side camera's view: horizontal speed kept, direction +x or -x, start at -+start_x."""
     qpos, qvel = qpos.copy(), qvel.copy()
     speed = math.hypot(qvel[0], qvel[1])
@@ -129,7 +130,7 @@ def throw(cfg, params: dict[str, np.ndarray], i: int, max_speed: float = 2.0):
     h = math.hypot(qvel[0], qvel[1])
     if h > max_speed:
         qvel[:2] *= max_speed / h
-    qpos, qvel = across_view(qpos, qvel)
+    qpos, qvel = launch_across_view(qpos, qvel)
     return model, qpos, qvel
 
 
@@ -153,7 +154,8 @@ def render_set(
 
     cfg = cfg.replace(n_test=n_per_class)
     key = cache.key({"synth": cfg.to_dict(), "seed": seed, "render": rcfg.__dict__ | {"progress": None},
-                     "max_speed": max_speed, "code": cache.source_hash("see.render", "simulate.scene", "simulate.synth", "realworld")})
+                     "max_speed": max_speed,
+                     "code": cache.source_hash("see.render", "simulate.scene", "simulate.synth", "experiments.realworld")})
     folder = Path(out_dir) / f"rendered-{key}"
     params = synth.sample_split(cfg, seed, "test")
     size = 2 * math.sqrt(4 * cfg.shape.size[0] * cfg.shape.size[1] / math.pi) if cfg.shape.kind == "box" else 2 * cfg.shape.size[0]
@@ -178,9 +180,10 @@ def book_set(preset_name: str, fps: float, duration: float, render_seed: int = 1
     """The rendered throws the book uses (the real-world chapter's, which the cue chapter measures the
     tracker on): the preset's ``videos_per_class`` of each class at 320 x 240, ``fps``, ``duration``
     seconds, with motion blur, sensor noise and JPEG loss; rendered once, then read from the cache."""
-    from study import experiments, synth
+    from study.experiments.presets import preset
+    from study.simulate import synth
 
-    p = experiments.preset(preset_name)
+    p = preset(preset_name)
     rcfg = render.RenderConfig(width=320, height=240, fps=fps, duration=duration, blur_subframes=2, noise_std=2.0,
                                jpeg_quality=85, shadows=p.render_shadows, seed=render_seed)
     cfg = synth.SynthConfig.preset(preset_name)
@@ -188,16 +191,26 @@ def book_set(preset_name: str, fps: float, duration: float, render_seed: int = 1
     return videos, rcfg
 
 
-def track_all(videos: list[Video], progress: bool = True) -> dict[str, track.Trajectory | str]:
-    """Track every video (heights in metres from its object size): file name -> trajectory, or the error message."""
-    out: dict[str, track.Trajectory | str] = {}
+@dataclass(frozen=True)
+class Tracked:
+    """What tracking one video gave: its trajectory, or why there is none."""
+
+    trajectory: track.Trajectory | None
+    """The tracked trajectory (heights in metres from the object's size), or None."""
+    error: str = ""
+    """Why the video could not be tracked ('' when it was)."""
+
+
+def track_all(videos: list[Video], progress: bool = True) -> dict[str, Tracked]:
+    """Track every video (heights in metres from its object size): file name -> :class:`Tracked`."""
+    out: dict[str, Tracked] = {}
     with Progress("track videos", total=len(videos), show=progress, unit="video") as bar:
         for v in videos:
             try:
-                out[v.path.name] = track.track_video(v.path, track.TrackConfig(color=v.color, progress=False),
-                                                     object_size=v.object_size)
+                out[v.path.name] = Tracked(track.track_video(v.path, track.TrackConfig(color=v.color, progress=False),
+                                                             object_size=v.object_size))
             except StudyError as e:
-                out[v.path.name] = str(e)
+                out[v.path.name] = Tracked(None, str(e))
             bar.update()
     return out
 
@@ -205,16 +218,16 @@ def track_all(videos: list[Video], progress: bool = True) -> dict[str, track.Tra
 def classify(
     model: Model,
     videos: list[Video],
-    tracks: dict[str, track.Trajectory | str] | None = None,
-    scale_factor: float = 1.0,
+    tracks: dict[str, Tracked] | None = None,
+    height_factor: float = 1.0,
     progress: bool = True,
 ) -> list[dict[str, Any]]:
     """Classify each video from its track (``tracks`` from :func:`track_all`, tracked here if None).
 
     Row: file, label, frames, found (fraction measured), filled, pieces, bounces (in the piece
-    used), scale (metres per pixel from the object size), p_light, p_heavy, predicted, correct, and
-    error (the reason, if the video could not be tracked; then no prediction). ``scale_factor``
-    multiplies the pixel scale, to measure how much the label depends on it.
+    used), metres_per_pixel (from the object size), p_light, p_heavy, predicted, correct, and
+    error (the reason, if the video could not be tracked; then no prediction). ``height_factor``
+    multiplies every height (a wrong pixel scale), to measure how much the label depends on it.
     """
     if model.dims != "z":
         raise ConfigError(f"the model was trained on {model.dims!r}; one camera gives only the height: use a 'z' model")
@@ -222,42 +235,22 @@ def classify(
     rows = []
     for v in videos:
         row: dict[str, Any] = {"file": v.path.name, "label": v.label}
-        traj = tracks[v.path.name]
-        if isinstance(traj, str):
-            rows.append(row | {"error": traj})
+        tracked = tracks[v.path.name]
+        traj = tracked.trajectory
+        if traj is None:
+            rows.append(row | {"error": tracked.error})
             continue
         piece = traj.longest()
-        x = track.to_model_input(traj, model.fps, model.n_frames, scale=scale_factor, rest_height=v.rest_height)
+        x = track.to_model_input(traj, model.fps, model.n_frames, height_factor=height_factor, rest_height=v.rest_height)
         p = np.asarray(model.predict_proba(x[None]))[0]
         pred = CLASSES[int(np.argmax(p))]
         row |= {"frames": len(traj.t), "found": traj.found_fraction, "filled": int(traj.filled.sum()),
-                "pieces": len(traj.segments()), "bounces": measure.bounce_count(piece.height) if piece.units == "m" else None, "scale": traj.scale,
+                "pieces": len(traj.segments()), "bounces": measure.bounce_count(piece.height) if piece.units == "m" else None,
+                "metres_per_pixel": traj.height_per_pixel,
                 "p_light": float(p[0]), "p_heavy": float(p[1]), "predicted": pred, "correct": pred == v.label,
                 "error": ""}
         rows.append(row)
     return rows
-
-
-def trained_z_model(dataset, preset_name: str, data_dir: str | Path = "data", progress: bool = False):
-    """The Z-only classifier of the paper's real-world test: the grid's best config on Z, trained on ``dataset``.
-
-    The trained model is kept in ``experiments.model_dir`` and reloaded when present: the Table 1
-    chapter's Z run with the same config and seed has already left it there.
-    """
-    from study import experiments
-    from study.learn import train
-
-    p = experiments.preset(preset_name)
-    cfg = experiments.best_config(experiments.grid(dataset, p, "peephole", data_dir=data_dir, progress=progress), p)
-    folder = experiments.model_dir(dataset, cfg, data_dir)
-    if folder.is_dir():
-        try:
-            return train.load(folder)
-        except StudyError:
-            pass  # a damaged copy is retrained and replaced
-    tm = train.fit(dataset, cfg, progress=progress)
-    tm.save(folder)
-    return tm
 
 
 def per_class_interval(rows: list[dict[str, Any]]) -> dict[str, Interval | None]:

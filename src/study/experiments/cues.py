@@ -5,8 +5,7 @@ in the motion through air drag: a light box falls measurably slower than a heavy
 ask which of those cues a classifier uses, with Table 1's protocol and configuration (no new grid):
 
 - :func:`observation_calibration`: the tracker's error on rendered video, the size of the observation
-  model's noise (``study.simulate.observe``);
-- :func:`air_off_dataset`: the same throws without drag (Table 1's runs on them: ``experiments.train_runs``);
+  model's noise (``study.simulate.observe``; the runner caches it: ``Runner.calibration``);
 - :func:`rules`: the one-feature rules on the first T seconds the networks see;
 - :func:`ceiling`: what a classifier given each throw's true restitution and friction (and mass) reaches;
 - :func:`robustness`: accuracy against each parameter of the observation model;
@@ -16,18 +15,17 @@ ask which of those cues a classifier uses, with Table 1's protocol and configura
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from study import cache, experiments, realworld
+from study.core import cache
+from study.experiments import realworld
+from study.experiments.stats import scored
 from study.learn import baseline
 from study.learn.metrics import Interval, bootstrap_accuracy
-from study.learn.train import TrainConfig
 from study.see import render, track
 from study.simulate import data, measure, observe, synth
 from study.simulate.scene import Shape
@@ -61,23 +59,6 @@ def observation_calibration(videos: Sequence[realworld.Video], depth: float = 4.
     mpp = render.metres_per_pixel(render.class_model("light"), "side", 240, depth=depth)
     return {"noise_px": float(r.std()), "noise_m": float(r.std() * mpp), "drop": lost / max(seen, 1),
             "n_frames": int(len(r)), "metres_per_pixel": mpp}
-
-
-# ---------------------------------------------------------------------------------------------
-# Conditions
-
-
-def air_off_dataset(preset: str, seed: int, data_dir: str | Path = "data") -> data.Dataset:
-    """The paper-scale dataset of ``seed`` with the air removed: the same objects and launches (the random
-    streams do not depend on ``air``), no drag and no added mass."""
-    return synth.dataset(synth.SynthConfig.preset(preset).replace(air=False), seed, data_dir=data_dir, progress=False)
-
-
-def observed(x: np.ndarray, fps: float, ob: observe.Observation, seed: int = 0, out_frames: int | None = None,
-             rest_height: float = 0.1) -> np.ndarray:
-    """Test trajectories ``x`` (n, T, 3) through the observation ``ob`` (seeded), cut to ``out_frames``."""
-    y = ob.apply(x, fps, np.random.default_rng(seed), rest_height=rest_height)
-    return y[:, :out_frames] if out_frames else y
 
 
 # ---------------------------------------------------------------------------------------------
@@ -122,7 +103,7 @@ def ceiling(dataset: data.Dataset, with_mass: bool = False) -> Interval:
     f_tr, f_te = table(dataset.train), table(dataset.test)
     mean, std = f_tr.mean(0), f_tr.std(0)
     w = baseline.logistic_regression((f_tr - mean) / std, np.asarray(dataset.train.y, float))
-    p = baseline._sigmoid(np.column_stack([(f_te - mean) / std, np.ones(len(f_te))]) @ w)
+    p = baseline.sigmoid(np.column_stack([(f_te - mean) / std, np.ones(len(f_te))]) @ w)
     return bootstrap_accuracy((p > 0.5) == (np.asarray(dataset.test.y) == 1))
 
 
@@ -152,7 +133,7 @@ def robustness(models: dict[str, Sequence[Any]], x: np.ndarray, y: np.ndarray, f
             xo = xo[:, :frames]
             for group, ms in models.items():
                 rows.append({"sweep": name, "label": label, "value": value, "group": group,
-                             "interval": experiments.scored(ms, xo, y)})
+                             "interval": scored(ms, xo, y)})
     return rows
 
 
@@ -212,52 +193,9 @@ def mixed_shapes(sets: dict[str, data.Dataset], names: Sequence[str] = MIXED) ->
     return data.Dataset(train=train, test=parts[0].test, fps=parts[0].fps, meta={"key": key})
 
 
-def rest_height_of(shape: Shape) -> float:
-    """Height of the centre at rest, metres, as the tracker is told it (its lowest face down)."""
-    return shape.rest_height
-
-
 def drag_per_class(a: np.ndarray, y: np.ndarray) -> dict[str, float]:
     """Median fall acceleration (m/s^2) of each class, from :func:`study.simulate.measure.fall_acceleration`."""
     return {c: float(np.nanmedian(a[np.asarray(y) == k])) for k, c in enumerate(("light", "heavy"))}
-
-
-def density_range(prior: synth.ClassPrior, shape: Shape) -> tuple[float, float]:
-    """The class's density range as this shape, kg/m^3."""
-    vol = {"box": 8 * math.prod(shape.size), "sphere": 4 / 3 * math.pi * shape.size[0] ** 3,
-           "cylinder": 2 * math.pi * shape.size[0] ** 2 * shape.size[1]}[shape.kind]
-    return prior.mass[0] / vol, prior.mass[1] / vol
-
-
-def randomised_config(cfg: TrainConfig, calibration: dict[str, float]) -> TrainConfig:
-    """``cfg`` trained on random observations, its validation observed as the calibrated tracker would."""
-    return dataclasses.replace(cfg, observe="randomised", observe_noise=calibration["noise_m"],
-                               observe_drop=calibration["drop"])
-
-
-def recommended(dataset: data.Dataset, cfg: TrainConfig, calibration: dict[str, float], seed: int = 0,
-                data_dir: str | Path = "data") -> tuple[str, dict[str, Interval], Any]:
-    """The Z model a camera in a car should use: of Table 1's (``cfg``, trained on exact positions) and the
-    one trained on random observations, the one with the higher accuracy on ``seed``'s validation
-    trajectories observed as the calibrated tracker observes them (never the test split).
-
-    Returns ``("faithful" | "randomised", {name: validation interval}, the chosen model)``. Both runs come
-    from the cache when the cue chapter has trained them, else they are trained here.
-    """
-    from study.learn import train
-
-    z = dataclasses.replace(cfg, dims="z", seed=seed)
-    configs = {"faithful": z, "randomised": randomised_config(z, calibration)}
-    for c in configs.values():
-        experiments.run(dataset, c, data_dir, test=False)
-    models = {k: experiments.trained(dataset, c, data_dir) for k, c in configs.items()}
-    _, va = train.split_train_val(len(dataset.train.y), cfg.val_fraction, seed)
-    T = cfg.n_frames(dataset.fps)
-    ob = observe.Observation(noise=calibration["noise_m"], drop=calibration["drop"])
-    x_val = observed(dataset.train.x[va, :T], dataset.fps, ob, seed=6)
-    val = {k: experiments.scored([m], x_val, dataset.train.y[va]) for k, m in models.items()}
-    choice = max(val, key=lambda k: val[k].value)
-    return choice, val, models[choice]
 
 
 def high_rate_test(preset: str, seed: int, seconds: float, fps: float = 120.0,

@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from study.errors import output_error
+from study.core.errors import output_error
 
-PACKAGE_DIR = Path(__file__).resolve().parent
+PACKAGE_DIR = Path(__file__).resolve().parent.parent
 
 
 def canonical_json(obj: Any) -> str:
@@ -87,7 +87,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
 
     On any exception the temporary file is removed and ``path`` is left as it was. A destination that
     cannot be written (its folder cannot be made, is read-only, lies under a file) raises
-    :class:`study.errors.OutputError` naming it.
+    :class:`study.core.errors.OutputError` naming it.
     """
     target = Path(path)
     try:
@@ -115,3 +115,8 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> None:
 def write_text_atomic(path: str | Path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
     write_bytes_atomic(path, text.encode())
+
+
+def subpackage_files(name: str, root: Path = PACKAGE_DIR) -> list[str]:
+    """The source files of the subpackage ``name`` (``"see"``) as :func:`source_hash` names them."""
+    return [f for f in source_files(root) if f.startswith(f"{name}/")]

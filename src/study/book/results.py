@@ -21,8 +21,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from study.cache import write_text_atomic
-from study.errors import ConfigError, DataError, check_file
+from study.core.cache import write_text_atomic
+from study.core.errors import ConfigError, DataError, check_file
 from study.learn.metrics import Interval
 
 FORMAT = "study.results/1"

@@ -1,0 +1,125 @@
+"""The configurations of the paper's experiments, as pure functions of a preset: which runs each one trains.
+
+:class:`study.experiments.runner.Runner` trains them; keeping the configurations here, free of any training,
+lets a reader see every run of an experiment in a few lines:
+
+1. :func:`grid_configs` -- the paper's grid search on Z for one cell, every point once per grid seed
+   (validation only); :func:`grid_points` summarises each point over its seeds and :func:`best_config`
+   picks the highest mean.
+2. :func:`seed_configs` -- Table 1: a config for Z and X, Y, Z with the preset's test seeds.
+3. :func:`protocol_changes` -- what each change of the training protocol did, on validation data.
+4. :func:`ablation_configs` -- each cell at its own grid winner, the same test seeds.
+5. :func:`length_configs` and :func:`long_memory_config` -- accuracy against input length (the paper's
+   Figure 4), and the long inputs again with a memory that spans them (chrono initialisation, full BPTT).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from typing import Any
+
+import numpy as np
+
+from study.experiments.presets import Preset
+from study.learn.config import Cell, Dims, TrainConfig
+
+BOTH: tuple[Dims, Dims] = ("z", "xyz")
+"""Table 1's two inputs, in the order the experiments train them."""
+GRID_FIELDS = ("cell", "lr", "truncation", "dropout", "batch_size")
+"""The fields that name a grid point (with the cell)."""
+
+
+def grid_configs(p: Preset, cell: Cell = "peephole") -> list[TrainConfig]:
+    """Every point of the preset's grid for ``cell``, once per grid seed."""
+    base = dataclasses.replace(p.base_config(), cell=cell)
+    return [dataclasses.replace(base, lr=lr, truncation=k, dropout=d, batch_size=b, seed=s)
+            for lr, k, d, b in itertools.product(p.lrs, p.truncations, p.dropouts, p.batch_sizes)
+            for s in p.grid_seeds]
+
+
+def grid_points(rows: list[dict]) -> list[dict]:
+    """The grid rows (one per run) grouped by point: mean and sample std of the validation accuracy over
+    the seeds, the mean validation loss, and how many of the seeds failed to train or diverged."""
+    out = []
+    for key, group in itertools.groupby(sorted(rows, key=lambda r: tuple(r[f] for f in GRID_FIELDS)),
+                                        key=lambda r: tuple(r[f] for f in GRID_FIELDS)):
+        g = list(group)
+        acc = np.array([r["val_accuracy"] for r in g])
+        out.append({**dict(zip(GRID_FIELDS, key)), "n": len(g), "val_mean": float(acc.mean()),
+                    "val_std": float(acc.std(ddof=1)) if len(g) > 1 else 0.0,
+                    "val_loss_mean": float(np.mean([r["val_loss"] for r in g])),
+                    "failed": sum(r["failed"] for r in g),
+                    "diverged": sum(r["diverged_epoch"] is not None for r in g),
+                    "epochs_mean": float(np.mean([r["epochs"] for r in g]))})
+    return out
+
+
+def best_config(rows: list[dict], p: Preset) -> TrainConfig:
+    """The grid point with the highest mean validation accuracy over its seeds (ties: lower mean
+    validation loss, then grid order), as the config the later experiments start from."""
+    best = min(grid_points(rows), key=lambda r: (-r["val_mean"], r["val_loss_mean"]))
+    return dataclasses.replace(p.base_config(), **{f: best[f] for f in GRID_FIELDS})
+
+
+def differs_from_defaults(cfg: TrainConfig, p: Preset) -> dict[str, tuple[Any, Any]]:
+    """The grid fields in which ``cfg`` differs from the preset's base config (TrainConfig's defaults, the
+    study's protocol): ``{field: (default, cfg's)}``; empty when the grid chose the defaults."""
+    base = p.base_config()
+    return {f: (getattr(base, f), getattr(cfg, f)) for f in GRID_FIELDS if getattr(base, f) != getattr(cfg, f)}
+
+
+def seed_configs(cfg: TrainConfig, seeds: tuple[int, ...], dims: tuple[Dims, ...] = BOTH, **changes: Any) -> list[TrainConfig]:
+    """``cfg`` (with ``changes``) for each of ``dims`` and ``seeds``: one config per (dims, seed)."""
+    return [dataclasses.replace(cfg, dims=d, seed=s, **changes) for d in dims for s in seeds]
+
+
+PROTOCOLS: tuple[str, ...] = (
+    "paper's network, our first protocol",
+    "+ forget bias 1 (the paper's TensorFlow default)",
+    "+ early stopping after a minimum, higher cap",
+    "+ gradient clipping (norm 1): the study's protocol",
+    "+ learning rate halved on plateaus",
+)
+"""The training protocols compared on validation data (:func:`protocol_changes`)."""
+STUDY_PROTOCOL = 3
+"""Index in :data:`PROTOCOLS` of the protocol every other experiment uses."""
+
+
+def protocol_changes(p: Preset) -> dict[str, dict[str, Any]]:
+    """Each protocol of :data:`PROTOCOLS` as the config fields it changes from the study's protocol: each
+    row adds one change to the row above it, up to the study's own (:data:`STUDY_PROTOCOL`); the last
+    row adds one more that the study does not keep. The first protocol stopped early as the preset's
+    ``first_patience`` and ``first_max_epochs`` say."""
+    first = {"min_epochs": 0, "max_epochs": p.first_max_epochs, "patience": p.first_patience}
+    changes = [{"forget_bias": 0.0, "clip_norm": 0.0, **first}, {"clip_norm": 0.0, **first}, {"clip_norm": 0.0}, {},
+               {"lr_schedule": "plateau"}]
+    return dict(zip(PROTOCOLS, changes))
+
+
+def protocol_plan(cfg: TrainConfig, p: Preset) -> list[tuple[str, TrainConfig]]:
+    """Every protocol of :func:`protocol_changes` at ``cfg``, for Z and X, Y, Z with ``p.protocol_seeds``."""
+    return [(name, c) for name, changes in protocol_changes(p).items()
+            for c in seed_configs(cfg, p.protocol_seeds, **changes)]
+
+
+def ablation_configs(winners: dict[Cell, TrainConfig], p: Preset) -> list[TrainConfig]:
+    """Each cell of ``p.cells`` at its own grid winner, on ``p.ablation_dims``, with the test seeds."""
+    return [dataclasses.replace(winners[c], cell=c, seed=s) for c in p.cells for s in p.seeds]
+
+
+def length_configs(cfg: TrainConfig, p: Preset) -> list[TrainConfig]:
+    """The length sweep: ``cfg`` for each (dims, length, seed)."""
+    return [dataclasses.replace(cfg, dims=d, length=L, seed=s) for d in BOTH for L in p.lengths for s in p.length_seeds]
+
+
+def long_memory_config(cfg: TrainConfig, fps: float) -> TrainConfig:
+    """``cfg`` with a memory that spans its input: chrono-initialised forget gates and full
+    back-propagation through time (the truncation covers every frame)."""
+    return dataclasses.replace(cfg, forget_init="chrono", truncation=max(cfg.truncation, cfg.n_frames(fps)))
+
+
+def long_memory_configs(cfg: TrainConfig, p: Preset, fps: float) -> list[TrainConfig]:
+    """The length sweep at ``p.long_lengths`` with :func:`long_memory_config`, one per (dims, length, seed)."""
+    return [long_memory_config(dataclasses.replace(cfg, dims=d, length=L, seed=s), fps)
+            for d in BOTH for L in p.long_lengths for s in p.long_seeds]

@@ -1,0 +1,112 @@
+"""How much of each experiment a preset runs: one :class:`Preset` per name of ``study.core.presets.NAMES``.
+
+The training protocol itself is not here: it is ``study.learn.config.TrainConfig``'s defaults (Table 1's
+configuration on the paper preset), which a preset only shortens (the smoke preset trains for three
+epochs). What a preset sets is the size of every experiment: the grid, the seeds, the lengths, and the
+sizes the cue, decision and real-world chapters use.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from study.core import presets
+from study.learn.config import Cell, Dims, TrainConfig
+
+_PROTOCOL = TrainConfig()
+"""The study's protocol: every preset's default for the fields below."""
+
+
+@dataclass(frozen=True)
+class Preset:
+    """How much of each experiment to run."""
+
+    name: str
+    """Its name in ``study.core.presets.NAMES``."""
+    lrs: tuple[float, ...]
+    """Grid: Adam learning rates."""
+    truncations: tuple[int, ...]
+    """Grid: truncated-BPTT lengths, frames."""
+    grid_seeds: tuple[int, ...]
+    """Seeds every grid point is trained with; a point is scored by its mean validation accuracy over them."""
+    seeds: tuple[int, ...]
+    """Test seeds of Table 1 and the ablation."""
+    lengths: tuple[float, ...]
+    """Input lengths of the length sweep, seconds."""
+    length_seeds: tuple[int, ...]
+    """Seeds per point of the length sweep."""
+    length: float = _PROTOCOL.length
+    """Input length for Table 1, the grid and the ablation, seconds."""
+    dropouts: tuple[float, ...] = (_PROTOCOL.dropout,)
+    """Grid: dropout probabilities (0.2 = the paper's keep-probability 0.8)."""
+    batch_sizes: tuple[int, ...] = (_PROTOCOL.batch_size,)
+    """Grid: trajectories per step."""
+    max_epochs: int = _PROTOCOL.max_epochs
+    """Epoch cap of every run."""
+    patience: int = _PROTOCOL.patience
+    """Early-stopping patience of every run, epochs."""
+    min_epochs: int = _PROTOCOL.min_epochs
+    """Epochs before early stopping may end a run."""
+    cells: tuple[Cell, ...] = ("peephole", "no-peephole", "gru")
+    """Cells compared in the ablation (``study.learn.config.Cell``), the paper's first."""
+    ablation_dims: Dims = "z"
+    """Input dims of the grid and the ablation (Z, as in the paper's search)."""
+    long_lengths: tuple[float, ...] = ()
+    """Lengths at which the long-memory variant runs (chrono initialisation, full BPTT), seconds."""
+    long_seeds: tuple[int, ...] = (0,)
+    """Seeds of the long-memory runs."""
+    protocol_seeds: tuple[int, ...] = (0,)
+    """Seeds of the training-protocol comparison (validation only)."""
+    first_patience: int = 10
+    """Early-stopping patience of the study's first protocol (the comparison's first row), epochs."""
+    first_max_epochs: int = 60
+    """Epoch cap of the study's first protocol."""
+    shape_train: int = 250
+    """Training throws per class and shape in the cue chapter's mixed-shape training set."""
+    shape_test: int = 500
+    """Test throws per class and shape in the cue chapter."""
+    calibration_per_class: int = 2500
+    """Throws per class in the decision chapter's calibration split (simulated for it alone: a 1 % miss
+    rate is then 25 heavy objects, not 4)."""
+    videos_per_class: int = 20
+    """Rendered videos per class in the real-world test (the paper filmed 20 + 20)."""
+    real_clips: int | None = None
+    """Most real clips the real-world test classifies (None: all there are)."""
+    render_shadows: bool = True
+    """Draw shadows in the rendered videos (slower)."""
+
+    def base_config(self) -> TrainConfig:
+        """The config every run starts from, before the grid values are set: the study's protocol, cut to
+        this preset's epochs."""
+        return dataclasses.replace(_PROTOCOL, dims=self.ablation_dims, length=self.length,
+                                   max_epochs=self.max_epochs, patience=self.patience, min_epochs=self.min_epochs)
+
+    @property
+    def n_grid(self) -> int:
+        """Number of grid points."""
+        return len(self.lrs) * len(self.truncations) * len(self.dropouts) * len(self.batch_sizes)
+
+
+PRESETS: dict[str, Preset] = {
+    # The whole book in minutes on the smoke dataset: 2 grid points, 2 seeds, 3 lengths, 3 epochs.
+    "smoke": Preset(
+        name="smoke", length=1.0, lrs=(3e-3,), truncations=(10, 30), grid_seeds=(0, 1), seeds=(0, 1),
+        lengths=(0.5, 1.0, 1.5), length_seeds=(0, 1), max_epochs=3, patience=2, min_epochs=2, long_lengths=(1.5,),
+        protocol_seeds=(0,), first_patience=1, first_max_epochs=2, shape_train=4, shape_test=4,
+        calibration_per_class=8, videos_per_class=2, real_clips=2, render_shadows=False,
+    ),
+    # The paper's scale: a 2 x 2 grid (learning rate x truncation) x 3 seeds x 3 cells; Table 1 with 5
+    # seeds; the training protocols with 2; the length sweep with 2 seeds; the long-memory test at 6 s.
+    # The protocol (epochs, patience) is TrainConfig's own. The README gives the measured build time.
+    "paper": Preset(
+        name="paper", lrs=(1e-3, 3e-3), truncations=(30, 90), grid_seeds=(0, 1, 2), seeds=(0, 1, 2, 3, 4),
+        lengths=(0.5, 1.0, 2.0, 3.0, 6.0), length_seeds=(0, 1), long_lengths=(6.0,), long_seeds=(0, 1),
+        protocol_seeds=(0, 1),
+    ),
+}
+
+
+def preset(name: str) -> Preset:
+    """The preset called ``name`` (``study.core.presets.NAMES``); :class:`ConfigError` for an unknown one."""
+    return PRESETS[presets.check(name)]

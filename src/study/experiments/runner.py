@@ -1,0 +1,248 @@
+"""The runner: one object that holds what every experiment needs, and whose methods are the experiments.
+
+A chapter opens one runner and calls it::
+
+    runner = Runner.open("paper", data_seed=0)          # the dataset, the data folder, workers, executor
+    cfg = runner.table1_config()                         # the peephole grid's winner: Table 1's configuration
+    rows = runner.seed_runs(cfg)                         # Table 1: Z and X, Y, Z over the preset's seeds
+
+Every training run goes through :meth:`Runner.runs`, which reads cached records and trains the others
+(``study.experiments.runs.run_all``: a local process pool, or a Dask cluster with ``scheduler``), and notes
+each run in the runner's :class:`~study.experiments.runs.Plan`, so a build knows how many models it
+trained. The configurations of the paper's experiments are in ``study.experiments.paper``; Table 1's
+configuration is derived once, here (:meth:`Runner.table1_config`), for every chapter.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from study.core import cache
+from study.experiments import paper, realworld, runs
+from study.experiments.presets import Preset, preset
+from study.experiments.stats import scored
+from study.learn import baseline, train
+from study.learn.config import Cell, Dims, TrainConfig
+from study.learn.metrics import Interval
+from study.simulate import data, observe, synth
+from study.simulate.data import Dataset
+
+
+@dataclass(frozen=True)
+class Runner:
+    """The study's experiments on one dataset, with where and how their runs are trained."""
+
+    dataset: Dataset
+    """The dataset every experiment trains on (``study.simulate.synth.dataset``)."""
+    preset: Preset
+    """How much of each experiment to run."""
+    data_dir: Path
+    """The cache folder, absolute: datasets, run records, models, videos."""
+    workers: int = 0
+    """Training processes at once on this machine; 0: one per CPU."""
+    progress: bool = False
+    """Show progress bars where the runner is called (a chapter's progress reaches the terminal anyway)."""
+    scheduler: str = ""
+    """Where runs are trained: '' a local process pool; 'local' a Dask ``LocalCluster``; else a Dask scheduler's
+    address (``tls://host:8786``)."""
+    render_seed: int = 1000
+    """Seed of the rendered throws of the real-world chapter, on which the tracker is calibrated."""
+    plan: runs.Plan = field(default_factory=runs.Plan.from_env, compare=False, repr=False)
+    """Every run this runner was asked for (``study.experiments.runs.Plan``)."""
+
+    @classmethod
+    def open(cls, preset_name: str, data_seed: int = 0, data_dir: str | Path = "data", *, workers: int = 0,
+             scheduler: str = "", progress: bool = False, render_seed: int = 1000) -> Runner:
+        """The runner of preset ``preset_name`` on its dataset of ``data_seed`` (simulated once, then cached)."""
+        folder = Path(data_dir).resolve()
+        ds = synth.dataset(preset_name, seed=data_seed, data_dir=folder, progress=progress)
+        return cls(ds, preset(preset_name), folder, workers, progress, scheduler, render_seed)
+
+    def on(self, dataset: Dataset) -> Runner:
+        """The same runner on another dataset (the same throws without air, other shapes, ...); it shares this
+        runner's plan."""
+        return dataclasses.replace(self, dataset=dataset, plan=self.plan)
+
+    @property
+    def fps(self) -> float:
+        """The dataset's frame rate, frames per second."""
+        return self.dataset.fps
+
+    @property
+    def synth_config(self) -> synth.SynthConfig:
+        """The preset's synthesis config (the priors, the shape, the scene)."""
+        return synth.SynthConfig.preset(self.preset.name)
+
+    # -----------------------------------------------------------------------------------------
+    # Runs
+
+    def runs(self, cfgs: list[TrainConfig], test: bool = True, desc: str = "runs") -> list[dict[str, Any]]:
+        """The records of ``cfgs`` on this runner's dataset, cached or trained (``runs.run_all``)."""
+        for c in cfgs:
+            self.plan.add(self.dataset, c, self.data_dir, test)
+        return runs.run_all(self.dataset, cfgs, self.data_dir, test, desc=desc, progress=self.progress,
+                            workers=self.workers or None, scheduler=self.scheduler or None)
+
+    def rows(self, cfgs: list[TrainConfig], *fields: str, test: bool = True, desc: str = "runs") -> list[dict]:
+        """The tidy rows of ``cfgs`` (``runs.row``): the named config fields and each run's numbers."""
+        return [runs.row(r, self.dataset, *fields) for r in self.runs(cfgs, test, desc)]
+
+    def train_runs(self, cfg: TrainConfig, dims: tuple[Dims, ...], seeds: tuple[int, ...], desc: str = "runs",
+                   **changes: Any) -> list[dict]:
+        """``cfg`` (with ``changes``) for each of ``dims`` and ``seeds``, scored on the test split: one row per
+        (dims, seed)."""
+        return self.rows(paper.seed_configs(cfg, seeds, dims, **changes), "dims", desc=desc)
+
+    def trained(self, cfg: TrainConfig) -> train.TrainedModel:
+        """The kept model of ``cfg`` on this dataset, trained first if no run has left it."""
+        if not runs.model_dir(self.dataset, cfg, self.data_dir).is_dir():
+            self.runs([cfg], test=False, desc="model")
+        return runs.trained(self.dataset, cfg, self.data_dir)
+
+    def models(self, cfg: TrainConfig, seeds: tuple[int, ...], **changes: Any) -> list[train.TrainedModel]:
+        """The kept models of ``cfg`` (with ``changes``) for each seed."""
+        return [self.trained(dataclasses.replace(cfg, seed=s, **changes)) for s in seeds]
+
+    # -----------------------------------------------------------------------------------------
+    # The paper's experiments
+
+    def grid(self, cell: Cell = "peephole") -> list[dict]:
+        """The grid search on ``preset.ablation_dims`` for ``cell``: one row per (point, seed), validation only."""
+        return self.rows(paper.grid_configs(self.preset, cell), *paper.GRID_FIELDS, test=False, desc=f"grid ({cell})")
+
+    def winner(self, cell: Cell = "peephole") -> TrainConfig:
+        """The best point of ``cell``'s grid (by the mean validation accuracy over the grid seeds)."""
+        return paper.best_config(self.grid(cell), self.preset)
+
+    def table1_config(self) -> TrainConfig:
+        """Table 1's configuration: the paper's network (the peephole LSTM) at its grid's best point, on Z. Every
+        chapter that uses "Table 1's model" starts from this."""
+        return self.winner("peephole")
+
+    def seed_runs(self, cfg: TrainConfig) -> list[dict]:
+        """Table 1: ``cfg`` for Z and X, Y, Z, one row per (dims, seed), with test accuracy."""
+        return self.rows(paper.seed_configs(cfg, self.preset.seeds), "dims", desc="Table 1")
+
+    def protocol_runs(self, cfg: TrainConfig) -> list[dict]:
+        """Every protocol of ``paper.protocol_changes`` at ``cfg``, for Z and X, Y, Z, validation only: one row per
+        (protocol, dims, seed)."""
+        plan = paper.protocol_plan(cfg, self.preset)
+        rows = self.rows([c for _, c in plan], "dims", test=False, desc="protocols")
+        return [r | {"protocol": name} for (name, _), r in zip(plan, rows)]
+
+    def ablation(self, winners: dict[Cell, TrainConfig]) -> list[dict]:
+        """Each cell at its own grid winner on Z with the test seeds: one row per (cell, seed)."""
+        return self.rows(paper.ablation_configs(winners, self.preset), "cell", desc="ablation")
+
+    def length_sweep(self, cfg: TrainConfig) -> list[dict]:
+        """Accuracy against input length: one row per (dims, length, seed) at ``cfg``."""
+        cfgs = paper.length_configs(cfg, self.preset)
+        rows = self.rows(cfgs, "dims", "length", desc="lengths")
+        return [r | {"frames": c.n_frames(self.fps)} for r, c in zip(rows, cfgs)]
+
+    def long_memory(self, cfg: TrainConfig) -> list[dict]:
+        """The length sweep at the preset's long lengths with a memory that spans the input (chrono
+        initialisation, full BPTT): one row per (dims, length, seed)."""
+        cfgs = paper.long_memory_configs(cfg, self.preset, self.fps)
+        rows = self.rows(cfgs, "dims", "length", "truncation", desc="long memory")
+        return [r | {"frames": c.n_frames(self.fps)} for r, c in zip(rows, cfgs)]
+
+    def baseline_runs(self) -> list[dict]:
+        """The physics baseline for Z and X, Y, Z at the preset's length: one row per dims (it has no seed)."""
+        out = []
+        for d in paper.BOTH:
+            m = baseline.fit(self.dataset, d, self.preset.length)
+            pred = m.predict_proba(self.dataset.test.x).argmax(axis=1)
+            res = train.metrics(self.dataset.test.y, pred)
+            out.append({"dims": d, "accuracy": res["accuracy"], "correct": pred == np.asarray(self.dataset.test.y),
+                        **{f"accuracy_{c}": a for c, a in res["per_class_accuracy"].items()},
+                        "coefficients": m.coefficients})
+        return out
+
+    # -----------------------------------------------------------------------------------------
+    # The camera: rendered throws, the tracker's calibration, the model a car would use
+
+    def rendered(self) -> tuple[list[realworld.Video], Any]:
+        """The real-world chapter's rendered throws at the data's frame rate, as long as Table 1's input (the
+        videos the tracker is calibrated on), rendered once."""
+        return realworld.book_set(self.preset.name, self.fps, self.preset.length, self.render_seed, self.data_dir)
+
+    @cached_property
+    def _calibration(self) -> dict[str, float]:
+        from study.experiments import cues
+        from study.see import config as track_config
+
+        videos, _ = self.rendered()
+        key = cache.key({"videos": sorted({v.path.parent.name for v in videos}), "n": len(videos),
+                         "track": dataclasses.asdict(track_config.TrackConfig(color=videos[0].color, progress=False)),
+                         "code": cache.source_hash(*cache.subpackage_files("see"), "experiments/cues.py")})
+        path = self.data_dir / "observation" / f"calibration-{key}.json"
+        try:
+            return json.loads(path.read_text())
+        except (OSError, ValueError):
+            pass  # not measured yet, or damaged: measure again
+        cal = cues.observation_calibration(videos)
+        cache.write_text_atomic(path, json.dumps(cal, indent=1) + "\n")
+        return cal
+
+    def calibration(self) -> dict[str, float]:
+        """The tracker's error on the rendered throws (``study.experiments.cues.observation_calibration``),
+        measured once per build and cached by the videos' key, the tracker's settings and the tracker's code."""
+        return dict(self._calibration)
+
+    def observation(self) -> observe.Observation:
+        """The calibrated observation: the tracker's noise and share of lost frames."""
+        cal = self.calibration()
+        return observe.Observation(noise=cal["noise_m"], drop=cal["drop"])
+
+    def randomised_config(self, cfg: TrainConfig) -> TrainConfig:
+        """``cfg`` trained on random observations, its validation observed as the calibrated tracker would."""
+        cal = self.calibration()
+        return dataclasses.replace(cfg, observe="randomised", observe_noise=cal["noise_m"], observe_drop=cal["drop"])
+
+    def recommended(self, cfg: TrainConfig, seed: int = 0) -> tuple[str, dict[str, Interval], train.TrainedModel]:
+        """The Z model a camera in a car should use: of Table 1's (``cfg``, trained on exact positions) and the
+        one trained on random observations, the one with the higher accuracy on ``seed``'s validation
+        trajectories observed as the calibrated tracker observes them (never the test split).
+
+        Returns ``("faithful" | "randomised", {name: validation interval}, the chosen model)``.
+        """
+        z = dataclasses.replace(cfg, dims="z", seed=seed)
+        models = {"faithful": self.trained(z), "randomised": self.trained(self.randomised_config(z))}
+        _, va = train.split_train_val(len(self.dataset.train.y), cfg.val_fraction, seed)
+        T = cfg.n_frames(self.fps)
+        x_val = self.observation().observe(self.dataset.train.x[va, :T], self.fps, seed=6)
+        val = {k: scored([m], x_val, self.dataset.train.y[va]) for k, m in models.items()}
+        choice = max(val, key=lambda k: val[k].value)
+        return choice, val, models[choice]
+
+    def rocket(self, dims: Dims, n_frames: int, seed: int, tests: dict[str, np.ndarray],
+               train_x: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """MiniRocket's labels on each of ``tests``, fitted on this dataset's training split (or ``train_x``),
+        cached like a run (``study.experiments.rockets``)."""
+        from study.experiments.rockets import rocket_predictions
+
+        return rocket_predictions(self.dataset, dims, n_frames, seed, tests, self.data_dir, train_x)
+
+    # -----------------------------------------------------------------------------------------
+    # Other datasets of the same study
+
+    def air_off(self) -> Runner:
+        """This runner on the same throws with the air removed (the random streams do not depend on ``air``)."""
+        cfg = synth.SynthConfig.from_dict(self.dataset.meta["config"]).replace(air=False)
+        return self.on(synth.dataset(cfg, int(self.dataset.meta["seed"]), data_dir=self.data_dir, progress=False))
+
+    def saved(self, dataset: Dataset, name: str) -> Dataset:
+        """An in-memory ``dataset`` (one with a key but no file) written to the cache once, so that workers read
+        it from the shared folder; returns it as read back."""
+        path = self.data_dir / f"{name}-{dataset.key}.npz"
+        if not path.is_file():
+            data.save(dataset, path)
+        return data.load(path)
