@@ -241,6 +241,26 @@ def test_changed_input_file_reexecutes_the_chapter_that_names_it(tiny: Path) -> 
     assert glued(tiny, "alpha", "content") == "'second'"
 
 
+def test_the_scheduler_reaches_the_chapters_that_take_it_and_stays_out_of_their_keys(tiny: Path) -> None:
+    beta = tiny / "book" / "beta.md"
+    beta.write_text(beta.read_text().replace('preset = "paper"\n```', 'preset = "paper"\nscheduler = ""\n```', 1)
+                    + "\n```{code-cell} ipython3\nfrom myst_nb import glue\n\nglue('scheduler', scheduler)\n```\n")
+    address = "tcp://192.0.2.1:8786"  # never contacted: the chapter only shows it
+    assert ran(book.execute(tiny, "smoke", scheduler=address)) == {"beta"}, "alpha declares no scheduler"
+    assert glued(tiny, "beta", "scheduler") == repr(address)
+    assert ran(book.execute(tiny, "smoke")) == set(), "where the runs go is not part of what they compute"
+
+
+@pytest.mark.slow  # starts a Dask LocalCluster
+def test_scheduler_local_starts_one_cluster_on_the_loopback_only() -> None:
+    from study.book import builder
+
+    with builder._cluster("local") as address:
+        assert address.startswith("tcp://127.0.0.1:")
+    with builder._cluster("tls://scheduler.example:8786") as address:
+        assert address == "tls://scheduler.example:8786", "an address is handed on as it is"
+
+
 def test_other_preset_reexecutes_everything(tiny: Path) -> None:
     # Keys include the injected parameters: no copy made with one preset is reused for another.
     assert ran(book.execute(tiny, "paper")) == {"alpha", "beta"}

@@ -199,3 +199,56 @@ def test_parallel_runs_equal_sequential_runs(tmp_path, ds):
         a, b = json.loads(f.read_text()), json.loads((tmp_path / "b" / "runs" / f.name).read_text())
         a.pop("train_seconds"), b.pop("train_seconds")
         assert a == b, "the same history, bit for bit, from a worker process"
+
+
+@pytest.mark.slow  # starts a Dask LocalCluster and trains on it
+def test_a_dask_cluster_trains_the_same_records_as_the_local_pool(tmp_path, smoke_dataset):
+    """The smoke Table 1, trained into one fresh folder on a LocalCluster and into another on the local process
+    pool: the same records, bit for bit (train_seconds aside), under the same keys."""
+    smoke = experiments.preset("smoke")
+    cfg = smoke.base_config()
+    pool = runner(smoke_dataset, smoke, tmp_path / "pool", workers=2).seed_runs(cfg)
+    dask = runner(smoke_dataset, smoke, tmp_path / "dask", workers=2, scheduler="local").seed_runs(cfg)
+    assert [r["accuracy"] for r in dask] == [r["accuracy"] for r in pool]
+    names = sorted(f.name for f in (tmp_path / "pool" / "runs").glob("*.json"))
+    assert names and names == sorted(f.name for f in (tmp_path / "dask" / "runs").glob("*.json"))
+    for name in names:
+        a, b = (json.loads((tmp_path / w / "runs" / name).read_text()) for w in ("pool", "dask"))
+        a.pop("train_seconds"), b.pop("train_seconds")
+        assert a == b
+    c = runs.client("local", 2)
+    assert c.scheduler.address.startswith("tcp://127.0.0.1:"), "a LocalCluster listens on the loopback only"
+    assert all(w.startswith("tcp://127.0.0.1:") for w in c.scheduler_info()["workers"])
+
+
+def test_a_worker_that_computes_another_key_refuses(tmp_path, ds):
+    cfg = TINY.base_config()
+    with pytest.raises(runs.WorkerError, match="computes run key .* where the submitter computed wrong"):
+        runs.train_task(ds, cfg, str(tmp_path), True, "wrong")
+    assert not (tmp_path / "runs").exists(), "it writes nothing"
+
+
+@pytest.mark.slow  # trains two tiny models
+def test_the_recommended_model_is_the_better_one_on_observed_validation_throws(tmp_path):
+    from study.simulate import observe
+
+    toy = model_toys.dataset(n=40, T=20)
+    r = runner(toy, TINY, tmp_path)
+    cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
+    ob = observe.Observation(noise=0.01, drop=0.1)
+    choice, val, model = r.recommended(cfg, ob=ob)
+    assert set(val) == {"faithful", "randomised"} and choice == max(val, key=lambda k: val[k].value)
+    expected = r.randomised_config(dataclasses.replace(cfg, dims="z"), ob) if choice == "randomised" else cfg
+    assert model.config == dataclasses.replace(expected, dims="z", seed=0)
+    assert r.randomised_config(cfg, ob).observe_noise == 0.01 and r.plan.n_models == 2
+    assert all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
+
+
+def test_an_in_memory_dataset_is_saved_once_for_the_workers(tmp_path, ds):
+    r = runner(ds, TINY, tmp_path)
+    saved = r.saved(ds, "mixed")
+    assert saved.path == tmp_path / f"mixed-{ds.key}.npz" and saved.key == ds.key
+    np.testing.assert_array_equal(saved.train.x, ds.train.x)
+    mtime = saved.path.stat().st_mtime_ns
+    assert r.saved(ds, "mixed").path.stat().st_mtime_ns == mtime, "written once"
+    assert r.on(saved).dataset is saved and r.on(saved).plan is r.plan

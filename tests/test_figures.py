@@ -10,11 +10,12 @@ import matplotlib.pyplot as plt
 from study.book import figures
 
 
-def test_class_colors_are_okabe_ito_blue_and_vermillion() -> None:
-    assert figures.CLASS_COLORS == {"light": "#0072B2", "heavy": "#D55E00"}
+def test_the_class_colours_are_colour_blind_safe_and_start_the_cycle() -> None:
+    assert set(figures.CLASS_COLORS.values()) <= set(figures.OKABE_ITO.values())
+    assert len(set(figures.CLASS_COLORS.values())) == 2
     figures.use_style()
     cycle = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
-    assert [c.upper() for c in cycle[:2]] == ["#0072B2", "#D55E00"]
+    assert [c.upper() for c in cycle[:2]] == [figures.CLASS_COLORS[c].upper() for c in ("light", "heavy")]
 
 
 def test_accuracy_vs_length_draws_both_inputs_with_failed_runs_marked() -> None:

@@ -202,23 +202,26 @@ class Runner:
         cal = self.calibration()
         return observe.Observation(noise=cal["noise_m"], drop=cal["drop"])
 
-    def randomised_config(self, cfg: TrainConfig) -> TrainConfig:
-        """``cfg`` trained on random observations, its validation observed as the calibrated tracker would."""
-        cal = self.calibration()
-        return dataclasses.replace(cfg, observe="randomised", observe_noise=cal["noise_m"], observe_drop=cal["drop"])
+    def randomised_config(self, cfg: TrainConfig, ob: observe.Observation | None = None) -> TrainConfig:
+        """``cfg`` trained on random observations, its validation observed as the calibrated tracker (or ``ob``)
+        would."""
+        ob = ob or self.observation()
+        return dataclasses.replace(cfg, observe="randomised", observe_noise=ob.noise, observe_drop=ob.drop)
 
-    def recommended(self, cfg: TrainConfig, seed: int = 0) -> tuple[str, dict[str, Interval], train.TrainedModel]:
+    def recommended(self, cfg: TrainConfig, seed: int = 0,
+                    ob: observe.Observation | None = None) -> tuple[str, dict[str, Interval], train.TrainedModel]:
         """The Z model a camera in a car should use: of Table 1's (``cfg``, trained on exact positions) and the
         one trained on random observations, the one with the higher accuracy on ``seed``'s validation
-        trajectories observed as the calibrated tracker observes them (never the test split).
+        trajectories observed as the calibrated tracker (or ``ob``) observes them (never the test split).
 
         Returns ``("faithful" | "randomised", {name: validation interval}, the chosen model)``.
         """
+        ob = ob or self.observation()
         z = dataclasses.replace(cfg, dims="z", seed=seed)
-        models = {"faithful": self.trained(z), "randomised": self.trained(self.randomised_config(z))}
+        models = {"faithful": self.trained(z), "randomised": self.trained(self.randomised_config(z, ob))}
         _, va = train.split_train_val(len(self.dataset.train.y), cfg.val_fraction, seed)
         T = cfg.n_frames(self.fps)
-        x_val = self.observation().observe(self.dataset.train.x[va, :T], self.fps, seed=6)
+        x_val = ob.observe(self.dataset.train.x[va, :T], self.fps, seed=6)
         val = {k: scored([m], x_val, self.dataset.train.y[va]) for k, m in models.items()}
         choice = max(val, key=lambda k: val[k].value)
         return choice, val, models[choice]
