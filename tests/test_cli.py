@@ -118,3 +118,19 @@ def test_help_does_not_import_torch():
     code = "import sys; from study import cli; cli.build_parser().format_help(); print('torch' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+@pytest.mark.slow  # trains a tiny model and tracks a rendered video
+def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, small_video, capsys):
+    out = tmp_path / "v"
+    assert cli.main(["train", "--data", str(dataset_file), "--length", "0.5", "--epochs", "1", "--inputs", "velocity",
+                     "--out", str(out), "--no-progress"]) == 0
+    capsys.readouterr()
+    assert json.loads((out / "config.json").read_text())["inputs"] == "velocity"
+    assert cli.main(["track", str(small_video), "--color", "orange", "--object-size", "0.2", "--out",
+                     str(tmp_path / "t.csv"), "--no-progress"]) == 0
+    for source in (tmp_path / "t.csv", small_video):
+        assert cli.main(["classify", str(source), "--model", str(out), "--color", "orange", "--object-size", "0.2",
+                         "--no-progress"]) == 0
+        line = capsys.readouterr().out.strip().splitlines()[-1]
+        assert line.startswith(f"{source}: ") and ("light (p = " in line or "heavy (p = " in line), line

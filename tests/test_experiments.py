@@ -88,7 +88,7 @@ def test_the_plan_counts_distinct_models_and_sums_their_training_time(tmp_path, 
 
 
 def test_grid_is_chosen_by_the_mean_over_seeds_not_one_lucky_run():
-    rows = [{"cell": "peephole", "lr": lr, "truncation": 30, "dropout": 0.2, "batch_size": 32, "seed": s,
+    rows = [{"cell": "peephole", "inputs": "positions", "lr": lr, "truncation": 30, "dropout": 0.2, "batch_size": 32, "seed": s,
              "val_accuracy": acc, "val_loss": 0.5, "failed": False, "diverged_epoch": None, "epochs": 40}
             for lr, accs in ((1e-3, (0.80, 0.80, 0.80)), (3e-3, (0.95, 0.55, 0.56))) for s, acc in enumerate(accs)]
     assert paper.best_config(rows, TINY).lr == 1e-3  # 3e-3 has the best single run, 1e-3 the best mean
@@ -159,7 +159,7 @@ def test_summarise():
 
 def test_presets():
     big = experiments.preset("paper")
-    assert len(big.grid_seeds) >= 3 and len(big.seeds) >= 5 and big.n_grid >= 2
+    assert len(big.grid_seeds) >= 3 and len(big.seeds) >= 5 and big.n_grid() >= 2 and big.n_grid('gru') >= big.n_grid()
     assert big.min_epochs >= 20 and big.max_epochs > 2 * big.min_epochs
     assert experiments.preset("smoke").max_epochs < big.max_epochs
     assert big.base_config() == train.TrainConfig(), "the paper preset trains with TrainConfig's own protocol"

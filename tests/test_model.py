@@ -8,6 +8,7 @@ import torch
 
 from study.core.errors import ConfigError, TrajectoryError
 from study.learn import native
+from study.learn.config import INPUTS
 from study.learn.model import CELLS, Classifier, PeepholeLSTM, peephole_reference
 from study.learn.stream import Streamer
 
@@ -88,11 +89,19 @@ def test_zero_peepholes_equal_nn_lstm(backend):
     torch.testing.assert_close(c, ref_c[0], atol=1e-12, rtol=0)
 
 
+def normalised(net: Classifier) -> Classifier:
+    """``net`` with a mean and a std per channel that are not 0 and 1 (so a test sees them used)."""
+    C = net.features.n_channels
+    net.set_normalisation(torch.linspace(-0.3, 0.4, C, dtype=net.features.mean.dtype),
+                          torch.linspace(0.5, 2.0, C, dtype=net.features.std.dtype))
+    return net
+
+
+@pytest.mark.parametrize("inputs", INPUTS)
 @pytest.mark.parametrize("cell", CELLS)
-def test_streaming_equals_whole_sequence(cell, backend):
+def test_streaming_equals_whole_sequence(cell, inputs, backend):
     torch.manual_seed(0)
-    net = Classifier(3, hidden=8, layers=2, cell=cell).double().eval()
-    net.set_scale(torch.tensor([0.5, 2.0, 0.3]))
+    net = normalised(Classifier(3, hidden=8, layers=2, cell=cell, inputs=inputs, fps=30.0).double().eval())
     x = torch.randn(2, 6, 3, dtype=torch.float64)
     state = net.init_state(2)
     for t in range(x.shape[1]):
@@ -108,9 +117,46 @@ def test_classifier_shapes_and_normalisation(cell):
     x = torch.randn(5, 7, 1)
     plain = net(x)
     assert plain.shape == (5, 2)
-    net.set_scale(torch.tensor([4.0]))
-    torch.testing.assert_close(net(4.0 * x), plain)  # inputs are divided by the stored std
-    assert "scale" in net.state_dict(), "the statistics travel with the weights"
+    net.set_normalisation(torch.tensor([0.0]), torch.tensor([4.0]))
+    torch.testing.assert_close(net(4.0 * x), plain)  # positions are divided by the stored std
+    assert {"features.mean", "features.std"} <= set(net.state_dict()), "the statistics travel with the weights"
+
+
+def test_velocity_channels_are_the_positions_and_their_differences_times_the_frame_rate():
+    from study.learn.model import Features
+
+    f = Features(1, "velocity", fps=30.0)
+    x = torch.tensor([[[1.0], [1.5], [1.25]]])  # (1, 3, 1) metres
+    torch.testing.assert_close(f.raw(x), torch.tensor([[[1.0, 0.0], [1.5, 15.0], [1.25, -7.5]]]))
+    torch.testing.assert_close(f.raw(x[:, 1:], prev=x[:, 0]), f.raw(x)[:, 1:]), "the frame before carries over"
+    f.mean.copy_(torch.tensor([1.0, 2.0]))
+    f.std.copy_(torch.tensor([0.5, 10.0]))
+    torch.testing.assert_close(f(x)[0, 1], torch.tensor([1.0, 1.3]))
+    assert Features(3, "positions").n_channels == 3 and Features(3, "velocity").n_channels == 6
+
+
+@pytest.mark.parametrize("cell", ["peephole", "gru"])
+def test_the_split_forward_pass_equals_the_whole_one_with_velocity(cell, backend):
+    """Truncated BPTT runs the first frames without a graph and hands the state on: the velocity of the first
+    frame after the split must come from the frame before it, so the two passes give the unsplit answer."""
+    from study.learn.train import last_logits
+
+    torch.manual_seed(0)
+    net = normalised(Classifier(1, hidden=8, cell=cell, inputs="velocity", fps=30.0).double().eval())
+    x = torch.randn(3, 20, 1, dtype=torch.float64)
+    torch.testing.assert_close(last_logits(net, x, truncation=7), net(x), atol=1e-12, rtol=0)
+
+
+@pytest.mark.parametrize("inputs", INPUTS)
+def test_a_nan_in_one_trajectory_reaches_its_output_only(inputs, backend):
+    torch.manual_seed(0)
+    net = normalised(Classifier(1, hidden=8, inputs=inputs).eval())
+    x = torch.randn(4, 10, 1)
+    x[2, 5, 0] = float("nan")
+    with torch.no_grad():
+        out = net(x)
+    assert torch.isnan(out[2]).all() and torch.isfinite(out[[0, 1, 3]]).all()
+    torch.testing.assert_close(out[[0, 1, 3]], net(x[[0, 1, 3]]), atol=1e-6, rtol=0)
 
 
 def test_dropout_only_in_training_mode():
@@ -176,11 +222,11 @@ def test_layer_without_grad_equals_layer_with_grad(backend):
     assert torch.equal(with_grad.detach(), without)
 
 
+@pytest.mark.parametrize("inputs", INPUTS)
 @pytest.mark.parametrize("cell", ["peephole", "no-peephole", "lstm"])
-def test_numpy_streamer_equals_whole_sequence(cell):
+def test_numpy_streamer_equals_whole_sequence(cell, inputs):
     torch.manual_seed(0)
-    net = Classifier(3, hidden=8, layers=2, cell=cell).double().eval()
-    net.set_scale(torch.tensor([0.5, 2.0, 0.3], dtype=torch.float64))
+    net = normalised(Classifier(3, hidden=8, layers=2, cell=cell, inputs=inputs, fps=30.0).double().eval())
     x = torch.randn(1, 12, 3, dtype=torch.float64)
     s = Streamer(net, dtype=np.float64)
     for t in range(x.shape[1]):

@@ -56,7 +56,7 @@ def test_history_and_contract(ds, tm):
 def test_normalisation_uses_the_training_part_only(ds, tm):
     tr, _ = train.split_train_val(len(ds.train.y), TINY.val_fraction, TINY.seed)
     expect = ds.train.x[tr, :15].reshape(-1, 3).astype(np.float64).std(axis=0)
-    np.testing.assert_allclose(tm.net.scale.numpy(), expect, rtol=1e-6)
+    np.testing.assert_allclose(tm.net.features.std.numpy(), expect, rtol=1e-6)
 
 
 def test_validation_split_is_seeded_and_disjoint():
@@ -322,19 +322,81 @@ def test_a_diverged_run_says_so_and_keeps_finite_weights(ds, tmp_path):
     assert train.load(tm.save(tmp_path / "m")).diverged_epoch == tm.diverged_epoch
 
 
-def test_a_format_1_model_reads_with_the_old_meaning_and_a_gap_is_refused(tm, tmp_path):
-    folder = tm.save(tmp_path / "old")
-    meta = json.loads((folder / "meta.json").read_text())
+def _as_old_format(folder, version: int) -> None:
+    """Rewrite a saved model directory as format 1 or 2 wrote it: the std as the state dict's 'scale', no
+    'inputs' field (and, for format 1, none of the protocol fields)."""
+    state = torch.load(folder / "weights.pt", weights_only=True)
+    state["scale"] = state.pop("features.std")
+    del state["features.mean"]
+    torch.save(state, folder / "weights.pt")
     cfg = json.loads((folder / "config.json").read_text())
-    for name in ("min_epochs", "forget_bias", "forget_init", "clip_norm", "lr_schedule"):
+    for name in ("inputs",) + (("min_epochs", "forget_bias", "forget_init", "clip_norm", "lr_schedule") if version == 1 else ()):
         del cfg[name]
     (folder / "config.json").write_text(json.dumps(cfg))
-    (folder / "meta.json").write_text(json.dumps({**meta, "format": "study.model/1"}))
+    meta = json.loads((folder / "meta.json").read_text())
+    (folder / "meta.json").write_text(json.dumps({**meta, "format": f"study.model/{version}"}))
+
+
+@pytest.mark.parametrize("version", [1, 2])
+def test_an_old_format_model_reads_as_positions_with_its_old_meaning(tm, ds, tmp_path, version):
+    folder = tm.save(tmp_path / "old")
+    _as_old_format(folder, version)
     old = train.load(folder)
-    assert (old.config.forget_bias, old.config.min_epochs, old.config.clip_norm) == (0.0, 0, 0.0)
-    (folder / "meta.json").write_text(json.dumps(meta))  # format 2 must carry every field
-    with pytest.raises(ModelError, match="lacks clip_norm, forget_bias, forget_init, lr_schedule, min_epochs"):
+    assert old.config.inputs == "positions" and old.net.features.inputs == "positions"
+    np.testing.assert_array_equal(old.predict_proba(ds.test.x), tm.predict_proba(ds.test.x))
+    if version == 1:
+        assert (old.config.forget_bias, old.config.min_epochs, old.config.clip_norm) == (0.0, 0, 0.0)
+
+
+def test_a_model_that_lacks_a_field_of_its_format_is_refused(tm, tmp_path):
+    folder = tm.save(tmp_path / "gap")
+    cfg = json.loads((folder / "config.json").read_text())
+    del cfg["inputs"], cfg["clip_norm"]
+    (folder / "config.json").write_text(json.dumps(cfg))
+    with pytest.raises(ModelError, match="lacks clip_norm, inputs"):  # never filled with today's defaults
         train.load(folder)
+
+
+def test_a_classifier_built_directly_starts_with_the_papers_forget_bias():
+    from study.learn.model import Classifier
+
+    torch.manual_seed(0)
+    mine = Classifier(3, hidden=8)
+    torch.manual_seed(0)
+    bare = Classifier(3, hidden=8, forget_bias=0.0)
+    torch.testing.assert_close(_forget_biases(mine), _forget_biases(bare) + 1.0)
+
+
+@pytest.mark.slow
+def test_a_velocity_model_trains_saves_reloads_and_streams(ds, tmp_path):
+    from study.learn.stream import Streamer
+
+    cfg = dataclasses.replace(TINY, dims="z", inputs="velocity", max_epochs=2)
+    tm = train.fit(ds, cfg, progress=False, warn=False)
+    assert tm.net.features.n_channels == 2 and tm.net.features.fps == ds.fps
+    back = train.load(tm.save(tmp_path / "v"))
+    assert back.config.inputs == "velocity"
+    np.testing.assert_array_equal(back.predict_proba(ds.test.x), tm.predict_proba(ds.test.x))
+    s = Streamer(back.net)
+    streamed = np.array([s.push(z) for z in ds.test.x[0, : tm.n_frames, 2:]])
+    np.testing.assert_allclose(streamed, back.predict_proba_frames(ds.test.x[:1])[0], atol=1e-5)
+    v = np.diff(ds.train.x[:, : tm.n_frames, 2], axis=1) * ds.fps
+    assert float(tm.net.features.std[1]) == pytest.approx(float(np.concatenate([np.zeros((len(v), 1)), v], 1)[
+        train.split_train_val(len(ds.train.y), cfg.val_fraction, cfg.seed)[0]].std()), rel=1e-4)
+
+
+def test_fixed_observation_training_draws_anew_every_epoch_and_is_seeded(ds):
+    """Frozen weights and no dropout: an epoch's training loss is the loss of the whole training part (up to the
+    order of the sum), so it changes from epoch to epoch only if the positions do."""
+    cfg = dataclasses.replace(FROZEN, observe="fixed", observe_noise=0.05, dropout=0.0, max_epochs=3, patience=3)
+    a = train.fit(ds, cfg, progress=False, warn=False)
+    b = train.fit(ds, cfg, progress=False, warn=False)
+    assert a.history == b.history, "seeded"
+    exact = train.fit(ds, dataclasses.replace(cfg, observe="exact"), progress=False, warn=False)
+    still = [h["train_loss"] for h in exact.history]
+    drawn = [h["train_loss"] for h in a.history]
+    assert max(still) - min(still) < 1e-6 < min(abs(x - y) for x, y in zip(drawn, drawn[1:]))
+    assert exact.history[0]["val_loss"] != a.history[0]["val_loss"], "validation observed too"
 
 
 def test_randomised_observation_training_sees_other_positions_than_exact(ds):

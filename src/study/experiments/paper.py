@@ -22,19 +22,19 @@ from typing import Any
 import numpy as np
 
 from study.experiments.presets import Preset
-from study.learn.config import Cell, Dims, TrainConfig
+from study.learn.config import Cell, Dims, Inputs, TrainConfig
 
 BOTH: tuple[Dims, Dims] = ("z", "xyz")
 """Table 1's two inputs, in the order the experiments train them."""
-GRID_FIELDS = ("cell", "lr", "truncation", "dropout", "batch_size")
-"""The fields that name a grid point (with the cell)."""
+GRID_FIELDS = ("cell", "inputs", "lr", "truncation", "dropout", "batch_size")
+"""The fields that name a grid point (with the cell and what it reads)."""
 
 
-def grid_configs(p: Preset, cell: Cell = "peephole") -> list[TrainConfig]:
-    """Every point of the preset's grid for ``cell``, once per grid seed."""
-    base = dataclasses.replace(p.base_config(), cell=cell)
+def grid_configs(p: Preset, cell: Cell = "peephole", inputs: Inputs = "positions") -> list[TrainConfig]:
+    """Every point of the preset's grid for ``cell`` reading ``inputs``, once per grid seed."""
+    base = dataclasses.replace(p.base_config(), cell=cell, inputs=inputs)
     return [dataclasses.replace(base, lr=lr, truncation=k, dropout=d, batch_size=b, seed=s)
-            for lr, k, d, b in itertools.product(p.lrs, p.truncations, p.dropouts, p.batch_sizes)
+            for lr, k, d, b in itertools.product(p.grid_lrs(cell), p.truncations, p.dropouts, p.batch_sizes)
             for s in p.grid_seeds]
 
 

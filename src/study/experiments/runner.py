@@ -29,7 +29,7 @@ from study.experiments import paper, realworld, runs
 from study.experiments.presets import Preset, preset
 from study.experiments.stats import scored
 from study.learn import baseline, train
-from study.learn.config import Cell, Dims, TrainConfig
+from study.learn.config import Cell, Dims, Inputs, TrainConfig
 from study.learn.metrics import Interval
 from study.simulate import data, observe, synth
 from study.simulate.data import Dataset
@@ -113,18 +113,21 @@ class Runner:
     # -----------------------------------------------------------------------------------------
     # The paper's experiments
 
-    def grid(self, cell: Cell = "peephole") -> list[dict]:
-        """The grid search on ``preset.ablation_dims`` for ``cell``: one row per (point, seed), validation only."""
-        return self.rows(paper.grid_configs(self.preset, cell), *paper.GRID_FIELDS, test=False, desc=f"grid ({cell})")
+    def grid(self, cell: Cell = "peephole", inputs: Inputs = "positions") -> list[dict]:
+        """The grid search on ``preset.ablation_dims`` for ``cell`` reading ``inputs``: one row per (point, seed),
+        validation only."""
+        return self.rows(paper.grid_configs(self.preset, cell, inputs), *paper.GRID_FIELDS, test=False,
+                         desc=f"grid ({cell}{', velocity' if inputs == 'velocity' else ''})")
 
-    def winner(self, cell: Cell = "peephole") -> TrainConfig:
+    def winner(self, cell: Cell = "peephole", inputs: Inputs = "positions") -> TrainConfig:
         """The best point of ``cell``'s grid (by the mean validation accuracy over the grid seeds)."""
-        return paper.best_config(self.grid(cell), self.preset)
+        return paper.best_config(self.grid(cell, inputs), self.preset)
 
-    def table1_config(self) -> TrainConfig:
+    def table1_config(self, inputs: Inputs = "positions") -> TrainConfig:
         """Table 1's configuration: the paper's network (the peephole LSTM) at its grid's best point, on Z. Every
-        chapter that uses "Table 1's model" starts from this."""
-        return self.winner("peephole")
+        chapter that uses "Table 1's model" starts from this. With ``inputs='velocity'``, the same network
+        reading velocity at the best point of its own grid (the same points, chosen by the same rule)."""
+        return self.winner("peephole", inputs)
 
     def seed_runs(self, cfg: TrainConfig) -> list[dict]:
         """Table 1: ``cfg`` for Z and X, Y, Z, one row per (dims, seed), with test accuracy."""

@@ -25,8 +25,12 @@ ForgetInit = Literal["constant", "chrono"]
 """How the forget gates' biases start: all at ``forget_bias``, or chrono (Tallec & Ollivier 2018)."""
 Loss = Literal["last", "every"]
 """Where the loss is taken: at the last frame only (the paper's), or at every frame."""
-Observe = Literal["exact", "randomised"]
-"""What a network is trained on: the simulator's positions, or positions as a random camera observes them."""
+Observe = Literal["exact", "randomised", "fixed"]
+"""What a network is trained on: the simulator's positions, positions as a random camera observes them, or
+positions observed with a fixed tracker error (a fresh draw every epoch)."""
+Inputs = Literal["positions", "velocity"]
+"""What the network reads of the positions it is given: the positions (the paper's), or the positions and their
+frame-to-frame velocity (``study.learn.model.Features``)."""
 Schedule = Literal["constant", "plateau"]
 """Learning-rate schedules: fixed, or halved when the validation loss stalls for ``patience // 4`` epochs."""
 
@@ -34,6 +38,8 @@ DIMS: dict[Dims, tuple[int, ...]] = {"z": (2,), "xyz": (0, 1, 2)}
 """Columns of the (x, y, z) trajectory each input dimension name selects."""
 CELLS: tuple[Cell, ...] = get_args(Cell)
 """Every cell, the paper's first."""
+INPUTS: tuple[Inputs, ...] = get_args(Inputs)
+"""Every input representation, the paper's first."""
 
 
 @dataclass(frozen=True)
@@ -81,13 +87,16 @@ class TrainConfig:
     answers' at every frame, so the network answers at every frame (back-propagation then runs through
     the whole input; ``truncation`` is not used; early stopping still scores the answer at the last frame)."""
     observe: Observe = "exact"
-    """What the network is trained on: 'exact' positions, or 'randomised' observations (each epoch sees the
-    training split through a camera and tracker drawn at random, ``study.simulate.observe.randomised``)."""
+    """What the network is trained on: 'exact' positions; 'randomised' observations (each epoch sees the
+    training split through a camera and tracker drawn at random, ``study.simulate.observe.randomised``); or
+    'fixed', the training split observed with ``observe_noise`` and ``observe_drop``, drawn afresh every epoch
+    (the validation split observed the same way, once)."""
     observe_noise: float = 0.0
-    """The tracker's calibrated position error, metres: with ``observe='randomised'`` the validation split
-    is observed with it (and ``observe_drop``) and the random noise spans [0, 3x] it."""
+    """The tracker's position error, metres: with 'fixed' the training and validation noise; with 'randomised'
+    the validation split's (and the random noise spans [0, 3x] it)."""
     observe_drop: float = 0.0
-    """The tracker's calibrated share of lost frames, for the validation split of a 'randomised' run."""
+    """The tracker's share of lost frames, for the training split of a 'fixed' run and the validation split of
+    an observed one."""
     val_fraction: float = 0.2
     """Share of the training split held out for early stopping (and for the grid search)."""
     seed: int = 0
@@ -95,6 +104,10 @@ class TrainConfig:
     cell: Cell = "peephole"
     """Recurrent cell: 'peephole' (the paper's), 'no-peephole' (the same layer, peepholes fixed at 0), 'lstm'
     (nn.LSTM) or 'gru' (nn.GRU)."""
+    inputs: Inputs = "positions"
+    """What the network reads: 'positions' (each coordinate over its standard deviation, the paper's) or
+    'velocity' (each coordinate and its frame-to-frame velocity, both standardised; computed inside the
+    model, so every caller still passes positions)."""
 
     def check(self) -> None:
         """Raise :class:`ConfigError` naming the first field that is out of range or not one of its choices."""
@@ -144,11 +157,14 @@ def select_inputs(x: np.ndarray, dims: str, n_frames: int, what: str = "trajecto
     return out
 
 
-OLD_MEANING: dict[str, object] = {"min_epochs": 0, "forget_bias": 0.0, "forget_init": "constant", "clip_norm": 0.0,
-                                  "lr_schedule": "constant", "loss_at": "last", "observe": "exact", "observe_noise": 0.0,
-                                  "observe_drop": 0.0}
-"""What the fields added with model format 2 meant before they existed: how a model saved in format 1 was
-trained (no minimum, no forget bias, no clipping, a constant learning rate)."""
+OLD_MEANING: dict[int, dict[str, object]] = {
+    1: {"min_epochs": 0, "forget_bias": 0.0, "forget_init": "constant", "clip_norm": 0.0, "lr_schedule": "constant",
+        "loss_at": "last", "observe": "exact", "observe_noise": 0.0, "observe_drop": 0.0, "inputs": "positions"},
+    2: {"inputs": "positions"},
+}
+"""What the fields added after each model format meant before they existed: how a model saved in format 1
+was trained (no minimum, no forget bias, no clipping, a constant learning rate, positions), and that a
+format-2 model reads positions."""
 
 
 @cache

@@ -13,11 +13,15 @@ Gers et al. (2002) and Sak et al. (2014), with diagonal peephole weights (one ve
 The gate order (i, f, g, o) and weight layout match ``nn.LSTM``, so with zero peepholes and
 ``bias = bias_ih + bias_hh`` the two compute the same function (tested).
 
-:class:`Classifier` is the paper's network. Its inputs are raw trajectories in metres; it divides each
-input dimension by the standard deviation measured on the training split (buffers ``scale``, set by
-:meth:`Classifier.set_scale`), so the statistics travel with the weights.
+:class:`Classifier` is the paper's network. Its inputs are raw trajectories in metres; a fixed first layer,
+:class:`Features`, turns them into what the recurrent layers read: the positions divided by their
+standard deviation on the training split (the paper's), or the positions and their frame-to-frame
+velocity, each standardised (a network that reads the motion, not only where the object is). The
+statistics are buffers, set by :meth:`Classifier.set_normalisation`, so they travel with the weights, and
+every caller -- training, ``study classify``, the frame-by-frame streamers -- passes positions alone.
 
-Shapes: B batch, T frames, D input dims (1 for Z, 3 for XYZ), H hidden units, L layers.
+Shapes: B batch, T frames, D input dims (1 for Z, 3 for XYZ), C channels the recurrent layers read (D for
+positions, 2 D with velocity), H hidden units, L layers.
 """
 
 from __future__ import annotations
@@ -30,12 +34,52 @@ import torch.nn.functional as F
 
 from study.core.errors import ConfigError
 from study.learn import native
-from study.learn.config import CELLS, Cell
+from study.learn.config import CELLS, INPUTS, Cell, Inputs
 from study.learn.gru import GRU
 
-# A layer's state is (h, c) for the LSTMs, h alone for the GRU; the classifier's state is whatever its
-# recurrent core takes: a list of per-layer (h, c) for the peephole stack, nn.LSTM's or nn.GRU's own.
+# A layer's state is (h, c) for the LSTMs, h alone for the GRU; the classifier's state is what its recurrent
+# core takes (a list of per-layer (h, c) for the peephole stack, nn.LSTM's or nn.GRU's own) with the last
+# input frame, from which the next frame's velocity is taken.
 State = object
+
+
+class Features(nn.Module):
+    """The classifier's fixed first layer: positions (B, T, D) metres -> channels (B, T, C) the recurrent
+    layers read.
+
+    ``'positions'`` (the paper's): ``x_t / std``, C = D. ``'velocity'``: ``(x_t - mean) / std`` and
+    ``(v_t - mean_v) / std_v`` with ``v_t = (x_t - x_{t-1}) fps``, C = 2 D; the first frame's velocity is 0,
+    unless the frame before it is given (the carried state of a trajectory fed in pieces). ``mean`` and
+    ``std`` (C,) are buffers, set from the training split by ``study.learn.train.fit``.
+    """
+
+    def __init__(self, n_dims: int, inputs: Inputs = "positions", fps: float = 30.0) -> None:
+        super().__init__()
+        if inputs not in INPUTS:
+            raise ConfigError(f"inputs = {inputs!r} is unknown; use one of {INPUTS}")
+        self.inputs, self.fps, self.n_dims = inputs, float(fps), n_dims
+        C = self.n_channels
+        self.register_buffer("mean", torch.zeros(C))  # (C,) of the training split; positions: unused
+        self.register_buffer("std", torch.ones(C))  # (C,) of the training split
+
+    @property
+    def n_channels(self) -> int:
+        """C: channels per frame."""
+        return self.n_dims * (2 if self.inputs == "velocity" else 1)
+
+    def raw(self, x: torch.Tensor, prev: torch.Tensor | None = None) -> torch.Tensor:
+        """The channels of ``x`` (B, T, D) before standardisation: (B, T, C). ``prev`` (B, D): the frame before
+        ``x``'s first (its velocity is then not 0)."""
+        if self.inputs == "positions":
+            return x
+        before = torch.cat([(x[:, :1] if prev is None else prev[:, None]), x[:, :-1]], dim=1)  # (B, T, D)
+        return torch.cat([x, (x - before) * self.fps], dim=-1)
+
+    def forward(self, x: torch.Tensor, prev: torch.Tensor | None = None) -> torch.Tensor:
+        """``x`` (B, T, D) metres -> standardised channels (B, T, C)."""
+        if self.inputs == "positions":
+            return x / self.std  # the paper's normalisation, bit for bit
+        return (self.raw(x, prev) - self.mean) / self.std
 
 
 class PeepholeLSTM(nn.Module):
@@ -319,22 +363,24 @@ class Classifier(nn.Module):
 
     def __init__(
         self, n_inputs: int, hidden: int = 64, layers: int = 2, dropout: float = 0.2, cell: Cell = "peephole",
-        forget_bias: float = 1.0, chrono_frames: int | None = None,
+        forget_bias: float = 1.0, chrono_frames: int | None = None, inputs: Inputs = "positions", fps: float = 30.0,
     ) -> None:
-        """A new classifier, its forget gates started as the paper's TensorFlow cell starts them (+1, or chrono
-        over ``chrono_frames`` frames; :meth:`init_forget_gates`): a training loop of one's own starts off the
-        plateau that a zero forget bias leaves it on."""
+        """A new classifier of ``n_inputs`` position dims (D), reading them as ``inputs`` (:class:`Features`; the
+        velocity at ``fps`` frames per second), its forget gates started as the paper's TensorFlow cell starts
+        them (+1, or chrono over ``chrono_frames`` frames; :meth:`init_forget_gates`): a training loop of one's
+        own starts off the plateau that a zero forget bias leaves it on."""
         super().__init__()
         if cell not in CELLS:
             raise ConfigError(f"cell = {cell!r} is not a known cell; use one of {CELLS}")
         self.cell_type = cell
-        self.register_buffer("scale", torch.ones(n_inputs))  # (D,) train-set std of each input dim
+        self.features = Features(n_inputs, inputs, fps)
+        C = self.features.n_channels
         if cell in ("peephole", "no-peephole"):
-            self.rnn = PeepholeStack(n_inputs, hidden, layers, peepholes=cell == "peephole")
+            self.rnn = PeepholeStack(C, hidden, layers, peepholes=cell == "peephole")
         elif cell == "lstm":
-            self.rnn = nn.LSTM(n_inputs, hidden, layers, batch_first=True)
+            self.rnn = nn.LSTM(C, hidden, layers, batch_first=True)
         else:
-            self.rnn = GRU(n_inputs, hidden, layers)  # nn.GRU, on the compiled loop where it can
+            self.rnn = GRU(C, hidden, layers)  # nn.GRU, on the compiled loop where it can
         self.drop = nn.Dropout(dropout)
         self.head = nn.Linear(hidden, 2)
         self.init_forget_gates(forget_bias, chrono_frames)
@@ -365,13 +411,22 @@ class Classifier(nn.Module):
                 if other is not None:
                     other[: 2 * H] = 0.0
 
-    def set_scale(self, std: torch.Tensor) -> None:
-        """Store the training split's per-dimension standard deviation (D,), metres."""
-        self.scale.copy_(std)
+    @property
+    def n_inputs(self) -> int:
+        """D: the position dims the classifier takes."""
+        return self.features.n_dims
+
+    def set_normalisation(self, mean: torch.Tensor, std: torch.Tensor) -> None:
+        """Store the training split's mean and standard deviation of each channel (C,) (:class:`Features`)."""
+        self.features.mean.copy_(mean)
+        self.features.std.copy_(std)
 
     def encode(self, x: torch.Tensor, state: State | None = None) -> tuple[torch.Tensor, State]:
-        """Raw ``x`` (B, T, D) metres -> last layer's hidden states (B, T, H) and the carried state."""
-        return self.rnn(x / self.scale, state)
+        """Raw ``x`` (B, T, D) metres -> last layer's hidden states (B, T, H) and the carried state (the
+        recurrent core's, and the last frame of ``x``)."""
+        core, prev = (None, None) if state is None else state
+        hs, core = self.rnn(self.features(x, prev), core)
+        return hs, (core, x[:, -1])
 
     def logits(self, h_last: torch.Tensor) -> torch.Tensor:
         """Last hidden state (B, H) -> class logits (B, 2), with dropout in training mode."""
@@ -383,12 +438,12 @@ class Classifier(nn.Module):
         return self.logits(hs[:, -1])  # (B, 2)
 
     def init_state(self, batch: int) -> State:
-        """The zero state for streaming ``batch`` trajectories with :meth:`step`."""
+        """The zero state for streaming ``batch`` trajectories with :meth:`step` (no frame seen yet)."""
         w = self.head.weight
         if isinstance(self.rnn, PeepholeStack):
-            return [layer.init_state(batch, w) for layer in self.rnn.layers]
+            return [layer.init_state(batch, w) for layer in self.rnn.layers], None
         h = w.new_zeros(self.rnn.num_layers, batch, self.rnn.hidden_size)
-        return (h, h.clone()) if self.cell_type == "lstm" else h
+        return ((h, h.clone()) if self.cell_type == "lstm" else h), None
 
     def step(self, x_t: torch.Tensor, state: State) -> tuple[torch.Tensor, State]:
         """Consume one frame ``x_t`` (B, D) metres; return class probabilities (B, 2) and the new state.

@@ -81,12 +81,17 @@ class Streamer:
     """Classify one trajectory frame by frame: ``push(xyz_or_z)`` -> probabilities (2,) of (light, heavy).
 
     Built from a :class:`study.learn.model.Classifier` with a ``peephole`` or ``lstm`` core (eval-mode
-    behaviour: no dropout). Inputs are raw metres, divided by the classifier's stored training
-    standard deviation, as in the network. ``reset()`` starts a new trajectory.
+    behaviour: no dropout). Inputs are raw metres, turned into the network's channels as its first layer
+    (``study.learn.model.Features``) does: divided by the training standard deviation, or, for a network that
+    reads velocity, standardised beside the velocity from the previous frame (0 at the first frame).
+    ``reset()`` starts a new trajectory.
     """
 
     def __init__(self, net: torch.nn.Module, dtype: type = np.float32) -> None:
-        self.n_inputs = int(net.scale.numel())
+        features = net.features
+        self.n_inputs = features.n_dims
+        self.velocity = features.inputs == "velocity"
+        self.fps = features.fps
         self.layers: list[_Layer] = []
         get = lambda t: t.detach().double().cpu().numpy()  # noqa: E731
         if net.cell_type in ("peephole", "no-peephole"):  # the latter's peepholes are zero buffers
@@ -104,7 +109,10 @@ class Streamer:
                 f"Streamer: cell {net.cell_type!r} is not supported; use Classifier.step for it, or a "
                 "'peephole', 'no-peephole' or 'lstm' model"
             )
-        self.inv_scale = (1.0 / get(net.scale)).astype(dtype)
+        self.inv_std = (1.0 / get(features.std)).astype(dtype)  # (C,)
+        self.mean = get(features.mean).astype(dtype)  # (C,)
+        self.prev = np.zeros(self.n_inputs, dtype)  # the last frame seen, for the velocity
+        self.channels = np.empty(features.n_channels, dtype)
         self.w_out = np.ascontiguousarray(get(net.head.weight).T, dtype=dtype)  # (H, 2)
         self.b_out = get(net.head.bias).astype(dtype)
         self.logits = np.empty(2, dtype)
@@ -115,6 +123,7 @@ class Streamer:
         for layer in self.layers:
             layer.reset()
         self.frames = 0
+        self.prev[:] = 0
 
     def update(self, x_t: np.ndarray) -> np.ndarray:
         """Consume one frame ``x_t`` (D,) metres and return the last layer's hidden state (H,) (a view)."""
@@ -122,7 +131,20 @@ class Streamer:
         if x_t.shape != (self.n_inputs,):
             raise TrajectoryError(f"Streamer.push: frame of shape {x_t.shape}; the model takes ({self.n_inputs},) metres")
         first = self.layers[0]
-        np.multiply(x_t, self.inv_scale, out=first.x)
+        if not self.velocity:
+            np.multiply(x_t, self.inv_std, out=first.x)
+        else:
+            D = self.n_inputs
+            c = self.channels
+            c[:D] = x_t
+            if self.frames:
+                np.subtract(x_t, self.prev, out=c[D:])
+                c[D:] *= self.fps
+            else:
+                c[D:] = 0  # the first frame's velocity
+            self.prev[:] = x_t
+            c -= self.mean
+            np.multiply(c, self.inv_std, out=first.x)
         h = first.step()
         for layer in self.layers[1:]:
             layer.x[:] = h

@@ -27,7 +27,7 @@ import os
 import shutil
 import tempfile
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -47,7 +47,7 @@ from study.learn.config import (  # re-exported: train.TrainConfig
     select_inputs,
 )
 from study.learn.metrics import failed_to_train, metrics
-from study.learn.model import Classifier
+from study.learn.model import Classifier, Features
 from study.simulate import observe
 from study.simulate.data import Dataset, Split
 
@@ -57,10 +57,13 @@ SOURCES = ("learn.config", "learn.model", "learn.gru", "learn.native", "learn.tr
 THREADS = 1
 """CPU threads used by :func:`fit` (see the module docstring)."""
 
-FORMAT_1 = "study.model/1"
-FORMAT = "study.model/2"
-"""Format 2 added the training fields min_epochs, forget_bias, forget_init, clip_norm, lr_schedule and the
-record of a diverged run; a format-1 directory is read with those fields' old meaning (``OLD_MEANING``)."""
+FORMATS = {"study.model/1": 1, "study.model/2": 2, "study.model/3": 3}
+"""Every model format this code reads. Format 2 added the training fields min_epochs, forget_bias,
+forget_init, clip_norm, lr_schedule and the record of a diverged run; format 3 the input representation
+(``TrainConfig.inputs``: the classifier's first layer, with a mean and a standard deviation per channel).
+An older directory is read with the later fields' old meaning (``OLD_MEANING``): positions, divided by
+their standard deviation."""
+FORMAT = "study.model/3"
 FILES = ("weights.pt", "config.json", "normalisation.json", "history.json", "meta.json")
 """What a saved model directory holds."""
 
@@ -160,7 +163,8 @@ class TrainedModel:
             torch.save(self.net.state_dict(), tmp / "weights.pt")
             texts = {
                 "config.json": dataclasses.asdict(self.config),
-                "normalisation.json": {"dims": self.dims, "std": self.net.scale.tolist()},
+                "normalisation.json": {"dims": self.dims, "inputs": self.config.inputs,
+                                       "mean": self.net.features.mean.tolist(), "std": self.net.features.std.tolist()},
                 "history.json": {"best_epoch": self.best_epoch, "diverged_epoch": self.diverged_epoch,
                                  "epochs": self.history},
                 "meta.json": {"format": FORMAT, "fps": self.fps, "data_key": self.data_key,
@@ -198,11 +202,12 @@ def load(model_dir: str | Path) -> TrainedModel:
         if not (d / name).is_file():
             raise ModelError(f"model directory {d} is missing {name}; {hint}")
     meta = _read_json(d / "meta.json")
-    if meta.get("format") not in (FORMAT_1, FORMAT):
+    version = FORMATS.get(meta.get("format"))
+    if version is None:
         raise ModelError(f"model directory {d}: format {meta.get('format')!r}, expected {FORMAT!r}; {hint}")
     fields = _read_json(d / "config.json")
-    if meta["format"] == FORMAT_1 and isinstance(fields, dict):
-        fields = {**OLD_MEANING, **fields}  # trained before these fields existed: what it was trained with
+    if version in OLD_MEANING and isinstance(fields, dict):
+        fields = {**OLD_MEANING[version], **fields}  # trained before these fields existed: what it was trained with
     missing = {f.name for f in dataclasses.fields(TrainConfig)} - set(fields if isinstance(fields, dict) else ())
     if missing:  # never fill a saved model's training with today's defaults
         raise ModelError(f"model file {d / 'config.json'} lacks {', '.join(sorted(missing))}; {hint}")
@@ -215,13 +220,18 @@ def load(model_dir: str | Path) -> TrainedModel:
         state = torch.load(d / "weights.pt", weights_only=True)
     except Exception as e:  # torch raises several types for a corrupt file
         raise ModelError(f"model file {d / 'weights.pt'} cannot be loaded ({type(e).__name__}); {hint}") from None
-    net = Classifier(len(DIMS[cfg.dims]), cfg.hidden, cfg.layers, cfg.dropout, cfg.cell)
+    net = Classifier(len(DIMS[cfg.dims]), cfg.hidden, cfg.layers, cfg.dropout, cfg.cell, inputs=cfg.inputs,
+                     fps=float(meta["fps"]))
+    if version < 3 and isinstance(state, dict) and "scale" in state:  # the positions' std, before the first layer
+        state = {**{k: v for k, v in state.items() if k != "scale"}, "features.std": state["scale"],
+                 "features.mean": torch.zeros_like(state["scale"])}
     try:
         net.load_state_dict(state)
     except (RuntimeError, TypeError) as e:
         raise ModelError(f"model file {d / 'weights.pt'} does not match config.json ({str(e)[:200]}); {hint}") from None
     norm = _read_json(d / "normalisation.json")
-    if norm.get("dims") != cfg.dims or not np.allclose(norm.get("std", []), net.scale.numpy(), rtol=1e-6):
+    if norm.get("dims") != cfg.dims or norm.get("inputs", "positions") != cfg.inputs \
+            or not np.allclose(norm.get("std", []), net.features.std.numpy(), rtol=1e-6):
         raise ModelError(f"model file {d / 'normalisation.json'} disagrees with the weights; {hint}")
     hist = _read_json(d / "history.json")
     net.eval()
@@ -302,19 +312,42 @@ OBSERVED_VIEWS = 8
 epoch (drawing a new one every epoch would cost more than the epoch)."""
 
 
-def _inputs(x: np.ndarray, tr: np.ndarray, va: np.ndarray, cfg: TrainConfig, fps: float) -> tuple[list[torch.Tensor], np.ndarray]:
-    """The training part's inputs, one view per epoch to cycle through, and the validation part's, from
-    the first frames ``x`` (n, T, 3): exact positions, or (``cfg.observe == 'randomised'``) observed ones."""
+def _inputs(x: np.ndarray, tr: np.ndarray, va: np.ndarray, cfg: TrainConfig,
+            fps: float) -> tuple[Callable[[int], torch.Tensor], np.ndarray]:
+    """The training part's positions for each epoch (a function of the epoch) and the validation part's, from
+    the first frames ``x`` (n, T, 3): exact positions; (``'randomised'``) observed by a random camera, eight
+    views cycled; or (``'fixed'``) observed with the config's tracker error, drawn afresh every epoch."""
     def inputs(a: np.ndarray) -> np.ndarray:
         return select_inputs(a, cfg.dims, a.shape[1], what="training split")
 
     if cfg.observe == "exact":
-        return [torch.from_numpy(inputs(x[tr]))], inputs(x[va])
+        exact = torch.from_numpy(inputs(x[tr]))
+        return lambda epoch: exact, inputs(x[va])
+    calibrated = observe.Observation(noise=cfg.observe_noise, drop=cfg.observe_drop)
+    if cfg.observe == "fixed":
+        rng = np.random.default_rng([cfg.seed, 2017])  # a stream of its own: never the test split's draw
+        x_val = inputs(calibrated.apply(x[va], fps, rng))
+        drawn: dict[int, torch.Tensor] = {}
+
+        def view(epoch: int) -> torch.Tensor:  # epochs come in order: each draws once from the same stream
+            if epoch not in drawn:
+                drawn.clear()
+                drawn[epoch] = torch.from_numpy(inputs(calibrated.apply(x[tr], fps, rng)))
+            return drawn[epoch]
+
+        return view, x_val
     rng = np.random.default_rng([cfg.seed, 2016])
     ranges = observe.Randomisation(noise=(0.0, 3 * cfg.observe_noise))
     views = [torch.from_numpy(inputs(observe.randomised(x[tr], fps, rng, ranges))) for _ in range(OBSERVED_VIEWS)]
-    calibrated = observe.Observation(noise=cfg.observe_noise, drop=cfg.observe_drop)
-    return views, inputs(calibrated.apply(x[va], fps, rng))
+    return lambda epoch: views[epoch % len(views)], inputs(calibrated.apply(x[va], fps, rng))
+
+
+def normalisation(x: torch.Tensor, features: Features) -> tuple[np.ndarray, np.ndarray]:
+    """The mean and standard deviation (C,) of every channel ``features`` makes of the positions ``x`` (n, T, D),
+    float64, a constant channel's std set to 1: what :meth:`Classifier.set_normalisation` stores."""
+    raw = features.raw(x.double()).reshape(-1, features.n_channels).numpy()  # (n T, C)
+    mean, std = raw.mean(axis=0), raw.std(axis=0)
+    return mean, np.where(std > 0, std, 1.0)
 
 
 class TrainingFailedWarning(UserWarning):
@@ -333,16 +366,16 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True, warn: bool = 
     if len(y) < 2:
         raise TrajectoryError(f"training split has {len(y)} trajectories; need at least 2")
     tr, va = split_train_val(len(y), cfg.val_fraction, cfg.seed)
-    views, x_val = _inputs(dataset.train.x[:, :T], tr, va, cfg, dataset.fps)
+    view, x_val = _inputs(dataset.train.x[:, :T], tr, va, cfg, dataset.fps)
     y_tr = torch.from_numpy(y[tr])
     x_va, y_va = torch.from_numpy(x_val), torch.from_numpy(y[va])
-    std = views[0].numpy().reshape(-1, x.shape[2]).astype(np.float64).std(axis=0)  # (D,) training part only
-    std = np.where(std > 0, std, 1.0)
+    features = Features(x.shape[2], cfg.inputs, dataset.fps)
+    mean, std = normalisation(view(0), features)  # (C,) the training part's first view only
 
     with deterministic(cfg.seed):
         net = Classifier(x.shape[2], cfg.hidden, cfg.layers, cfg.dropout, cfg.cell, forget_bias=cfg.forget_bias,
-                         chrono_frames=T if cfg.forget_init == "chrono" else None)
-        net.set_scale(torch.from_numpy(std).float())
+                         chrono_frames=T if cfg.forget_init == "chrono" else None, inputs=cfg.inputs, fps=dataset.fps)
+        net.set_normalisation(torch.from_numpy(mean).float(), torch.from_numpy(std).float())
         opt = torch.optim.Adam(net.parameters(), lr=cfg.lr, foreach=True)  # one kernel per update op for all tensors
         sched = (torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=max(1, cfg.patience // 4))
                  if cfg.lr_schedule == "plateau" else None)
@@ -352,7 +385,7 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True, warn: bool = 
         bar = tqdm(range(cfg.max_epochs), desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
         for epoch in bar:
             net.train()
-            x_tr = views[epoch % len(views)]  # the same positions each epoch, or another observation of them
+            x_tr = view(epoch)  # the same positions each epoch, or another observation of them
             order = torch.randperm(len(y_tr))
             total = 0.0
             for i in range(0, len(order), cfg.batch_size):

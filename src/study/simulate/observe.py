@@ -147,6 +147,12 @@ class Camera:
     kind: str = "side"
     """One of :data:`CAMERAS`."""
 
+    def metres_per_pixel(self, depth: float | None = None) -> float:
+        """The size of one pixel at ``depth`` metres along the view (default: the camera's distance), metres:
+        ``2 depth tan(fovy / 2) / rows``."""
+        self.validate()
+        return 2 * (self.distance if depth is None else depth) * math.tan(math.radians(self.fovy) / 2) / self.rows
+
     def validate(self) -> None:
         if self.kind not in CAMERAS:
             raise ConfigError(f"Camera.kind = {self.kind!r} is unknown; use one of {', '.join(CAMERAS)}")
