@@ -91,3 +91,117 @@ def test_clearing_thresholds_bound_the_cumulative_miss_rate():
     assert (cleared >= 0).mean() > 0.5 and np.median(cleared[cleared >= 0]) > 0
     per_frame = np.array([decide.threshold_for_miss_rate(p[:, t], y, 0.01) for t in range(T)])
     assert (decide.time_to_clear(p[y == 1], per_frame) >= 0).mean() > 0.01  # per-frame 1 % is not enough
+
+
+def test_the_clopper_pearson_bound_of_known_cases():
+    assert 0.0099 < decide.clopper_pearson_upper(0, 299) < 0.01 < decide.clopper_pearson_upper(0, 298) < 0.0101
+    assert decide.clopper_pearson_upper(0, 299) == pytest.approx(1 - 0.05 ** (1 / 299))  # (1 - p)^n = 0.05
+    assert decide.clopper_pearson_upper(1, 20) == pytest.approx(0.2161, abs=1e-4)
+    assert decide.clopper_pearson_upper(20, 20) == 1.0
+    assert decide.clopper_pearson_upper(1, 20, level=0.99) > decide.clopper_pearson_upper(1, 20)
+    with pytest.raises(ConfigError, match="k = 3 of n = 2"):
+        decide.clopper_pearson_upper(3, 2)
+    with pytest.raises(ConfigError, match="confidence level"):
+        decide.clopper_pearson_upper(1, 20, level=1.0)
+
+
+def test_the_certified_threshold_refuses_a_small_set_and_handles_ties(scores):
+    p, y = scores
+    small = np.r_[np.zeros(50, int), np.ones(298, int)]
+    assert decide.certified_threshold(np.linspace(0, 1, len(small)), small, 0.01) is None  # 298 < 299 heavy
+    frames = np.linspace(0, 1, len(small))[:, None].repeat(3, 1)
+    assert decide.certified_clearing_thresholds(frames, small, 0.01) is None
+    enough = np.r_[np.zeros(50, int), np.ones(299, int)]
+    t = decide.certified_threshold(np.linspace(0.01, 1, len(enough)), enough, 0.01)
+    assert t == pytest.approx(0.01 + 0.99 * 50 / 348)  # k = 0: the smallest heavy score, nothing below it
+    plain, certified = decide.threshold_for_miss_rate(p, y, 0.01), decide.certified_threshold(p, y, 0.01)
+    assert certified < plain  # 5000 heavy: 50 misses allowed on the split, 38 certified
+    assert decide.clopper_pearson_upper(38, 5000) <= 0.01 < decide.clopper_pearson_upper(39, 5000)
+    assert np.sum(p[y == 1] < certified) == 38 < np.sum(p[y == 1] < np.nextafter(certified, 1))
+    # ties: 400 heavy allow 12 certified misses at 5 %; 10 heavy at 0.1, 10 at 0.2, 380 at 0.9
+    heavy = np.r_[np.full(10, 0.1), np.full(10, 0.2), np.full(380, 0.9)]
+    yt = np.r_[np.zeros(5, int), np.ones(400, int)]
+    t = decide.certified_threshold(np.r_[np.full(5, 0.05), heavy], yt, 0.05)
+    assert t == 0.2 and np.sum(heavy < t) == 10  # any higher threshold would miss 20 > 12
+    with pytest.raises(ConfigError, match="target miss rate"):
+        decide.certified_threshold(p, y, 0.0)
+    with pytest.raises(ConfigError, match="no heavy"):
+        decide.certified_threshold(np.array([0.2, 0.4]), np.array([0, 0]), 0.01)
+    with pytest.raises(ConfigError, match="confidence level"):
+        decide.certified_threshold(p, y, 0.01, level=0.0)
+
+
+def test_the_certified_threshold_holds_on_data_it_has_not_seen():
+    """Heavy scores from Beta(5, 2), whose CDF is the true miss rate of any threshold: over 1000 calibration
+    sets of 500 heavy throws, the certified threshold's true miss rate is within 5 % in at least 95 % of them
+    (the plain empirical quantile: in about half)."""
+    from scipy import stats
+
+    rng = np.random.default_rng(0)
+    draws, n, target = 1000, 500, 0.05
+    heavy, light = rng.beta(5, 2, (draws, n)), rng.beta(2, 5, (draws, 100))
+    y = np.r_[np.zeros(100, int), np.ones(n, int)]
+    cert = np.array([decide.certified_threshold(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
+    plain = np.array([decide.threshold_for_miss_rate(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
+    held, held_plain = np.mean(stats.beta.cdf(cert, 5, 2) <= target), np.mean(stats.beta.cdf(plain, 5, 2) <= target)
+    k = decide._certified_misses(n, target, 0.95)  # 16 certified misses of 500
+    assert 1 - stats.binom.cdf(k, n, target) >= 0.95  # the exact coverage of the (k + 1)-th smallest score: 0.966
+    assert held >= 0.95 and held_plain < 0.6, (held, held_plain)
+
+
+@pytest.mark.parametrize("frames", ["independent", "monotone", "correlated"])
+def test_certified_clearing_thresholds_hold_on_data_they_have_not_seen(frames):
+    """The share of heavy objects ever cleared, over 200 calibration sets of 500 heavy throws and 8 frames, is
+    within 5 % in at least 95 % of them. Independent frames (heavy scores Beta(a_t, 2)) and monotone ones
+    (u^c_t of one uniform u) give the true rate exactly; correlated ones (a random walk of logits) on a fresh
+    draw of 20000 heavy throws."""
+    from scipy import stats
+
+    rng = np.random.default_rng({"independent": 10, "monotone": 11, "correlated": 12}[frames])
+    draws, n, T, target = 200, 500, 8, 0.05
+    a_t, c_t = np.linspace(2, 6, T), np.linspace(1.0, 0.3, T)
+    y = np.r_[np.zeros(100, int), np.ones(n, int)]
+
+    def heavy(m: int) -> np.ndarray:
+        if frames == "independent":
+            return rng.beta(a_t, 2.0, (m, T))
+        if frames == "monotone":
+            return rng.random((m, 1)) ** c_t
+        z = np.cumsum(rng.standard_normal((m, T)) * 0.5, axis=1) + np.linspace(0.5, 2.0, T)
+        return 1 / (1 + np.exp(-z))
+
+    held = []
+    for _ in range(draws):
+        thr = decide.certified_clearing_thresholds(np.r_[rng.beta(2, 5, (100, T)), heavy(n)], y, target)
+        if frames == "independent":
+            true = 1 - np.prod(1 - stats.beta.cdf(thr, a_t, 2.0))
+        elif frames == "monotone":  # cleared at frame t iff u < thr_t^(1 / c_t)
+            true = np.max(thr ** (1 / c_t))
+        else:
+            true = np.mean(decide.time_to_clear(heavy(20000), thr) >= 0)
+        held.append(true <= target)
+    assert np.mean(held) >= 0.95, np.mean(held)
+
+
+def test_what_the_decision_chapter_reads_off_a_split(scores):
+    assert decide.heavy_needed(0.01) == 299 and decide.heavy_needed(0.05) == 59
+    p, y = scores
+    half = np.arange(len(y)) % 2 == 0  # calibration and test splits, both classes in each
+    op = decide.operating_point(p[half], y[half], p[~half], y[~half], 0.01)
+    assert op["certified"] == decide.certified_threshold(p[half], y[half], 0.01) < op["empirical"]
+    assert op["miss"].value <= op["miss_empirical"].value
+    assert op["false_alarm"].value >= op["false_alarm_empirical"].value
+    few = np.r_[np.zeros(10, int), np.ones(100, int)]
+    none = decide.operating_point(np.linspace(0, 1, 110), few, p, y, 0.01)
+    assert none["certified"] is None and none["miss"] is None and none["miss_empirical"] is not None
+    rng = np.random.default_rng(4)
+    n, T = 2000, 10
+    yy = np.repeat([0, 1], n // 2)
+    drift = np.linspace(0, 2, T)[None, :] * np.where(yy == 1, 1, -1)[:, None]
+    f_cal, f_test = (1 / (1 + np.exp(-(drift + rng.standard_normal((n, T))))) for _ in range(2))
+    c = decide.clearing(f_cal, yy, f_test, yy, 0.05)
+    assert c["thresholds"].shape == (T,) and c["cleared"].shape == (n // 2,)
+    assert c["share_cleared"].value == c["cleared"].mean() and len(c["times"]) == c["cleared"].sum()
+    assert (c["times"] >= 0).all() and c["miss"].value < 0.1
+    assert decide.clearing(f_cal[:300], yy[:300] * 0 + 1, f_test, yy, 0.01)["thresholds"] is not None
+    assert decide.clearing(f_cal[:200], np.ones(200, int), f_test, yy, 0.01)["thresholds"] is None

@@ -228,20 +228,21 @@ def test_a_worker_that_computes_another_key_refuses(tmp_path, ds):
     assert not (tmp_path / "runs").exists(), "it writes nothing"
 
 
-@pytest.mark.slow  # trains two tiny models
-def test_the_recommended_model_is_the_better_one_on_observed_validation_throws(tmp_path):
+@pytest.mark.slow  # trains four tiny models
+def test_the_recommended_model_is_the_best_candidate_on_observed_validation_throws(tmp_path):
     from study.simulate import observe
 
     toy = model_toys.dataset(n=40, T=20)
     r = runner(toy, TINY, tmp_path)
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     ob = observe.Observation(noise=0.01, drop=0.1)
-    choice, val, model = r.recommended(cfg, ob=ob)
-    assert set(val) == {"faithful", "randomised"} and choice == max(val, key=lambda k: val[k].value)
-    expected = r.randomised_config(dataclasses.replace(cfg, dims="z"), ob) if choice == "randomised" else cfg
-    assert model.config == dataclasses.replace(expected, dims="z", seed=0)
-    assert r.randomised_config(cfg, ob).observe_noise == 0.01 and r.plan.n_models == 2
-    assert all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
+    cands = r.candidates({"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}, ob)
+    assert list(cands) == ["positions, exact", "positions, randomised", "velocity, exact", "velocity, randomised"]
+    assert cands["velocity, randomised"].observe == "randomised" and cands["velocity, randomised"].observe_noise == 0.01
+    choice, val, models = r.recommended(cands, ob=ob)
+    assert set(val) == set(models) == set(cands) and choice == max(val, key=lambda k: val[k].value)
+    assert models[choice].config == dataclasses.replace(cands[choice], seed=0)
+    assert r.plan.n_models == 4 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
 
 
 def test_an_in_memory_dataset_is_saved_once_for_the_workers(tmp_path, ds):

@@ -68,12 +68,17 @@ def _add_synth(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--data-dir", type=Path, default=Path("data"), help="cache folder (default: %(default)s)")
     p.add_argument("--threads", type=int, default=None, help="simulation threads (default: all cores)")
+    from study.simulate.synth import SynthConfig
+
+    _add_fields(p, SynthConfig, ["engine"])
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
         from study.simulate import synth
 
         cfg = synth.SynthConfig.preset(a.preset)
+        if a.engine != cfg.engine:  # Bullet has no air: its data set is the air-off one of the same throws
+            cfg = cfg.replace(engine=a.engine, air=cfg.air and a.engine == "mujoco")
         with removed_on_error(a.out):
             if a.out is not None:
                 check_writable(a.out, "dataset")

@@ -7,9 +7,22 @@ The builder merges the parts of the book's chapters into one file, ``_build/resu
 and ``study results --compare OTHER`` compares with another build's (:func:`compare`). A chapter run
 by hand, outside the builder, writes nothing.
 
-Verdicts use one vocabulary for the whole book (:data:`VERDICTS`), computed from intervals: a number
-of the paper is *reproduced* when it lies inside our interval, else ours *differs*; several verdicts
-that disagree make a *mixed* outcome (:func:`combine`).
+Verdicts use one vocabulary for the whole book (:data:`VERDICTS`) and one rule, decided here from
+intervals and never typed by a chapter:
+
+- a number of the paper ``p`` against our 95 % interval (:func:`number`): *reproduced* if the interval
+  lies inside ``p`` ± :func:`margin` (the equivalence margin :data:`DELTA` plus the paper's own sampling
+  error on :data:`N_PAPER` test videos), *differs* if it lies wholly outside, *inconclusive* otherwise;
+- a claimed order, A above (or below) B, against the interval of our difference A - B (:func:`order`):
+  *reproduced* if it lies on the claimed side of 0, *differs* if it lies wholly on the other side or
+  wholly inside [-δ, δ] (no difference), *inconclusive* otherwise;
+- *not comparable* (:func:`not_comparable`: our experiment differs in kind, with the reason) and
+  *qualitative* (:func:`qualitative`: a figure without a number, with the criterion it is judged by);
+- several of these made one (:func:`combined`, :func:`combine`): the same verdict, or *mixed*.
+
+Each is a :class:`Decision`: the verdict and the inputs it was decided from, which the results file
+stores beside the verdict (:attr:`Number.decision`), so any reader can decide it again
+(:func:`decide`, at another margin too) and check a file (:func:`recompute`).
 """
 
 from __future__ import annotations
@@ -22,41 +35,215 @@ from pathlib import Path
 from typing import Any
 
 from study.core.cache import write_text_atomic
-from study.core.errors import ConfigError, DataError, check_file
+from study.core.errors import ConfigError, DataError, check_file, check_range
 from study.learn.metrics import Interval
 
 FORMAT = "study.results/1"
+"""The results file's format; :attr:`Number.decision` is an optional field of it (files without it load)."""
 ENV = "STUDY_RESULTS_PART"
 """Environment variable naming the file a chapter writes its numbers to (set by ``study book``)."""
 FILE = Path("_build") / "results.json"
 """Where the builder writes the merged results, relative to the book's root."""
-VERDICTS = ("reproduced", "differs", "mixed")
+VERDICTS = ("reproduced", "differs", "inconclusive", "not comparable", "qualitative", "mixed")
 """The book's one vocabulary for comparing our numbers with the paper's."""
+RULES = ("number", "order", "not comparable", "qualitative", "combined")
+"""The kinds of :class:`Decision`, as stored under ``inputs["rule"]``."""
+
+DELTA = 0.03
+"""The equivalence margin δ, a fraction (3 points of accuracy): the smallest difference the book treats
+as a difference. The paper's own finding that X, Y, Z beats Z alone rests on a 3-point gap (81 % against
+78 %), so a gap surely smaller than that is smaller than any effect the paper reports; a number of ours
+within δ of the paper's (beyond the paper's sampling error) reproduces it, and a difference of two of
+ours that lies wholly inside [-δ, δ] is no difference."""
+N_PAPER = 1000
+"""Test videos behind each of the paper's accuracies. The paper tests on "1000 test videos for both
+categories"; we read that as 1000 in all (500 a class), the smaller of its two readings (the other is
+1000 a class), which gives the paper's number the larger sampling error and so the wider margin: at
+81 %, 1.96 · sqrt(0.81 · 0.19 / 1000) = 2.4 points (1.7 points at 2000)."""
+Z = 1.96
+"""The standard normal quantile of a two-sided 95 % interval, for the paper's sampling error."""
 
 
-def verdict(paper: float, interval: Interval) -> str:
-    """``"reproduced"`` if the paper's number lies inside our interval, else ``"differs"``."""
-    return "reproduced" if interval.contains(paper) else "differs"
+@dataclass(frozen=True)
+class Rule:
+    """The parameters of the verdict rule: the equivalence margin and the paper's test-set size."""
+
+    delta: float = DELTA
+    """Equivalence margin δ, a fraction in [0, 1) (:data:`DELTA`)."""
+    n_paper: int = N_PAPER
+    """Test items behind the paper's number (:data:`N_PAPER`); a chapter comparing with a number the
+    paper measured on fewer (20 real videos) passes its own ``Rule(n_paper=20)``."""
+
+    def __post_init__(self) -> None:
+        check_range("Rule.delta", self.delta, 0.0, 1.0, hi_open=True)
+        if isinstance(self.n_paper, bool) or not isinstance(self.n_paper, int) or self.n_paper < 1:
+            raise ConfigError(f"Rule.n_paper = {self.n_paper!r}: give the paper's number of test items, "
+                              "an integer >= 1")
 
 
-def claim_verdict(difference: Interval, expected_sign: int) -> str:
-    """A claim of the paper that one number exceeds another (``expected_sign`` +1) or falls below it (-1),
-    against the interval of our difference: ``"reproduced"`` if the interval lies wholly on the claimed
-    side of zero, else ``"differs"``."""
-    side = difference.lo > 0 if expected_sign > 0 else difference.hi < 0
-    return "reproduced" if side else "differs"
+RULE = Rule()
+"""The book's rule: δ = :data:`DELTA`, n_paper = :data:`N_PAPER`."""
+
+
+def margin(p: float, rule: Rule = RULE) -> float:
+    """The half-width M (a fraction) around a paper's number ``p`` (a fraction) inside which our interval
+    reproduces it: ``δ + 1.96 · sqrt(p (1 - p) / n_paper)``."""
+    _check_fraction("paper", p)
+    return _margin(float(p), rule.delta, rule.n_paper)
+
+
+def _margin(p: float, delta: float, n_paper: int) -> float:
+    return delta + Z * math.sqrt(p * (1.0 - p) / n_paper)
+
+
+def _check_fraction(name: str, p: Any) -> None:
+    if isinstance(p, bool) or not isinstance(p, (int, float)) or not 0.0 <= p <= 1.0:
+        raise ConfigError(f"{name} = {p!r}: give the paper's number as a fraction in [0, 1] (0.81 for 81 %)")
+
+
+def _bounds(interval: Any, what: str) -> tuple[float, float]:
+    """(lo, hi) of an :class:`Interval`, checked finite and ordered."""
+    if not isinstance(interval, Interval):
+        raise ConfigError(f"{what}: got {type(interval).__name__}; pass an Interval (study.learn.metrics)")
+    lo, hi = float(interval.lo), float(interval.hi)
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+        raise ConfigError(f"{what}: interval [{lo}, {hi}] must be finite with lo <= hi; "
+                          "a verdict needs a real interval")
+    return lo, hi
+
+
+def _verdict_number(inputs: dict[str, Any], delta: float) -> str:
+    p, lo, hi = float(inputs["paper"]), float(inputs["lo"]), float(inputs["hi"])
+    m = _margin(p, delta, int(inputs["n_paper"]))
+    if p - m <= lo and hi <= p + m:
+        return "reproduced"
+    if lo > p + m or hi < p - m:
+        return "differs"
+    return "inconclusive"
+
+
+def _verdict_order(inputs: dict[str, Any], delta: float) -> str:
+    sign, lo, hi = int(inputs["sign"]), float(inputs["lo"]), float(inputs["hi"])
+    if (sign > 0 and lo > 0) or (sign < 0 and hi < 0):
+        return "reproduced"  # the order is established, however small the difference
+    if (sign > 0 and hi < 0) or (sign < 0 and lo > 0) or (-delta <= lo and hi <= delta):
+        return "differs"  # the other order, or no difference worth the name
+    return "inconclusive"
+
+
+def decide(inputs: dict[str, Any], delta: float | None = None) -> str:
+    """The verdict of a decision's stored ``inputs`` (:attr:`Decision.inputs`), decided again; at the
+    margin ``delta`` (a fraction) instead of the stored one if given (the summary shows every verdict at
+    δ/2 and 2δ too). :class:`ConfigError` for inputs of no known rule or missing a field."""
+    if delta is not None:
+        check_range("decide: delta", delta, 0.0, 1.0, hi_open=True)
+    if not isinstance(inputs, dict) or inputs.get("rule") not in RULES:
+        got = inputs.get("rule") if isinstance(inputs, dict) else type(inputs).__name__
+        raise ConfigError(f"decision inputs: rule {got!r} is none of {RULES}; build them with results.number, "
+                          "order, not_comparable, qualitative or combined")
+    rule = inputs["rule"]
+    try:
+        if rule == "number":
+            return _verdict_number(inputs, float(inputs["delta"]) if delta is None else delta)
+        if rule == "order":
+            return _verdict_order(inputs, float(inputs["delta"]) if delta is None else delta)
+        if rule in ("not comparable", "qualitative"):
+            return rule
+        parts = inputs["parts"]
+        if not isinstance(parts, list) or not parts:
+            raise ConfigError("decision inputs: a combined decision needs a non-empty list of parts")
+        return combine([decide(part, delta) for part in parts])
+    except (KeyError, TypeError, ValueError, ArithmeticError) as e:
+        if isinstance(e, ConfigError):
+            raise
+        raise ConfigError(f"decision inputs of rule {rule!r}: malformed ({type(e).__name__}: {e}); "
+                          "build them with the constructor of that rule") from None
 
 
 def combine(verdicts: list[str]) -> str:
-    """One verdict from several: all reproduced, all differ, or ``"mixed"``."""
+    """One verdict from several.
+
+    *not comparable* parts are set aside when any other part exists, then *qualitative* parts when any
+    part with a number (reproduced, differs, inconclusive, mixed) remains; if what is left is all one
+    verdict, that is the verdict, else it is *mixed*. So: reproduced + reproduced = reproduced;
+    reproduced + differs, reproduced + inconclusive, differs + inconclusive = mixed; inconclusive +
+    inconclusive = inconclusive; anything + mixed = mixed; reproduced + qualitative = reproduced;
+    qualitative + not comparable = qualitative; not comparable alone = not comparable.
+    """
     unknown = set(verdicts) - set(VERDICTS)
     if unknown or not verdicts:
         raise ConfigError(f"verdicts {verdicts!r}: need one or more of {VERDICTS}")
-    if all(v == "reproduced" for v in verdicts):
-        return "reproduced"
-    if all(v == "differs" for v in verdicts):
-        return "differs"
-    return "mixed"
+    left = list(verdicts)
+    for aside in ("not comparable", "qualitative"):
+        if any(v != aside for v in left):
+            left = [v for v in left if v != aside]
+    return left[0] if len(set(left)) == 1 else "mixed"
+
+
+@dataclass(frozen=True)
+class Decision:
+    """A verdict with the inputs it was decided from (JSON-able: what :func:`decide` needs to decide it
+    again). Build one with :func:`number`, :func:`order`, :func:`not_comparable`, :func:`qualitative` or
+    :func:`combined`; a verdict that does not follow from its inputs is refused."""
+
+    verdict: str
+    """One of :data:`VERDICTS`."""
+    inputs: dict[str, Any]
+    """``{"rule": "number", "paper", "lo", "hi", "delta", "n_paper"}``, ``{"rule": "order", "sign", "lo",
+    "hi", "delta"}``, ``{"rule": "not comparable", "reason"}``, ``{"rule": "qualitative", "criterion"}`` or
+    ``{"rule": "combined", "parts": [inputs, ...]}`` (fractions, as floats)."""
+
+    def __post_init__(self) -> None:
+        again = decide(self.inputs)
+        if self.verdict != again:
+            raise ConfigError(f"Decision: verdict {self.verdict!r} does not follow from its inputs ({again!r}); "
+                              "build it with results.number, order, not_comparable, qualitative or combined")
+
+
+def _decision(inputs: dict[str, Any]) -> Decision:
+    return Decision(decide(inputs), inputs)
+
+
+def number(paper: float, interval: Interval, rule: Rule = RULE) -> Decision:
+    """The paper's number ``paper`` (a fraction) against our 95 % ``interval``: *reproduced* if the
+    interval lies inside ``paper`` ± :func:`margin`, *differs* if wholly outside it, else *inconclusive*."""
+    _check_fraction("paper", paper)
+    lo, hi = _bounds(interval, f"number(paper = {paper!r})")
+    return _decision({"rule": "number", "paper": float(paper), "lo": lo, "hi": hi,
+                      "delta": float(rule.delta), "n_paper": int(rule.n_paper)})
+
+
+def order(difference: Interval, sign: int, rule: Rule = RULE) -> Decision:
+    """A claim of the paper that A exceeds B (``sign`` +1) or falls below it (-1), against the interval of
+    our difference A - B (a fraction): *reproduced* if it lies on the claimed side of 0; *differs* if it
+    lies wholly on the other side, or wholly inside [-δ, δ] (no difference); else *inconclusive*. An
+    interval on the claimed side but inside [-δ, δ] is *reproduced*: the order holds, if by little."""
+    if sign not in (1, -1) or isinstance(sign, bool):
+        raise ConfigError(f"order: sign = {sign!r}; use +1 (the paper says A beats B) or -1 (A falls below B)")
+    lo, hi = _bounds(difference, "order(difference)")
+    return _decision({"rule": "order", "sign": int(sign), "lo": lo, "hi": hi, "delta": float(rule.delta)})
+
+
+def not_comparable(reason: str) -> Decision:
+    """*not comparable*: our experiment differs in kind from the paper's; ``reason`` says how."""
+    if not isinstance(reason, str) or not reason.strip():
+        raise ConfigError("not_comparable: give the reason, in words, why our experiment cannot be compared")
+    return _decision({"rule": "not comparable", "reason": reason})
+
+
+def qualitative(criterion: str) -> Decision:
+    """*qualitative*: a figure of the paper without a number; ``criterion`` says what it is judged by."""
+    if not isinstance(criterion, str) or not criterion.strip():
+        raise ConfigError("qualitative: give the criterion, in words, the figure is compared by")
+    return _decision({"rule": "qualitative", "criterion": criterion})
+
+
+def combined(decisions: list[Decision]) -> Decision:
+    """Several decisions made one (:func:`combine` of their verdicts); the parts' inputs are kept."""
+    if not decisions or not all(isinstance(d, Decision) for d in decisions):
+        raise ConfigError(f"combined: got {decisions!r}; pass a non-empty list of Decisions "
+                          "(results.number, order, not_comparable, qualitative)")
+    return _decision({"rule": "combined", "parts": [d.inputs for d in decisions]})
 
 
 @dataclass
@@ -82,13 +269,19 @@ class Number:
     paper: float | None = None
     """The paper's number it is compared with, if any."""
     verdict: str | None = None
-    """:func:`verdict` against ``paper``, or a verdict the chapter computed for a claim."""
+    """The verdict of :attr:`decision` (one of :data:`VERDICTS`), or None."""
     source: dict[str, Any] = field(default_factory=dict)
     """What produced it: configs, seeds, data key, backend."""
+    decision: dict[str, Any] | None = None
+    """The inputs :attr:`verdict` was decided from (:attr:`Decision.inputs`; :func:`decide` decides it
+    again); None without a verdict, and in files written before verdicts stored their inputs."""
 
     @property
     def interval(self) -> Interval:
         return Interval(self.value, self.lo, self.hi, self.method)
+
+
+_NO_VERDICT_ARGS = ("verdict", "verdict_")
 
 
 class Results:
@@ -99,22 +292,42 @@ class Results:
         self.numbers: dict[str, Number] = {}
 
     def add(self, name: str, interval: Interval | float, *, what: str = "", unit: str = "fraction",
-            paper: float | None = None, verdict_: str | None = None, **source: Any) -> Number:
-        """Record ``interval`` (or a plain number, which has no interval) as ``<chapter>.<name>``; with
-        ``paper``, its verdict against the paper's number is computed unless ``verdict_`` is given."""
+            paper: float | None = None, decision: Decision | None = None, rule: Rule = RULE,
+            **source: Any) -> Number:
+        """Record ``interval`` (or a plain number, which has no interval) as ``<chapter>.<name>``.
+
+        With ``paper`` (a fraction), its verdict is :func:`number` of ``paper`` against ``interval`` under
+        ``rule``; or pass ``decision`` (a :class:`Decision`, e.g. :func:`order` for a difference), which
+        is stored as given. The verdict and its inputs are stored with the number.
+        """
+        bad = [k for k in _NO_VERDICT_ARGS if k in source]
+        if bad:
+            raise ConfigError(f"Results.add({name!r}): {bad[0]}= is gone; pass decision=results.order(...) "
+                              "(or paper=, whose verdict is computed) so the verdict is decided, not typed")
         iv = interval if isinstance(interval, Interval) else Interval(float(interval), float(interval), float(interval), "exact")
         full = f"{self.chapter}.{name}"
-        v = verdict_ if verdict_ is not None else (verdict(paper, iv) if paper is not None else None)
-        num = Number(full, iv.value, iv.lo, iv.hi, iv.method, self.chapter, what, unit, paper, v, source)
+        if decision is not None and not isinstance(decision, Decision):
+            raise ConfigError(f"Results.add({name!r}): decision = {decision!r}; build a Decision with "
+                              "results.number, order, not_comparable, qualitative or combined")
+        if decision is None and paper is not None:
+            if unit != "fraction":
+                raise ConfigError(f"Results.add({name!r}): a paper number in {unit!r} has no verdict rule; "
+                                  "pass decision= (the rule compares fractions)")
+            decision = number(paper, iv, rule)
+        v, inputs = (decision.verdict, decision.inputs) if decision is not None else (None, None)
+        num = Number(full, iv.value, iv.lo, iv.hi, iv.method, self.chapter, what, unit, paper, v, source, inputs)
         self.numbers[full] = num
         return num
 
-    def verdict(self, name: str, verdict_: str, what: str, **source: Any) -> Number:
-        """Record a verdict that is not one number's (a table's, a claim's) as ``<chapter>.<name>``."""
-        if verdict_ not in VERDICTS:
-            raise ConfigError(f"verdict {verdict_!r}: use one of {VERDICTS}")
+    def verdict(self, name: str, decision: Decision, what: str, **source: Any) -> Number:
+        """Record a verdict that is not one number's (a table's, a claim's, a combination) as
+        ``<chapter>.<name>``: ``decision`` is a :class:`Decision`, never a typed verdict."""
+        if not isinstance(decision, Decision):
+            raise ConfigError(f"Results.verdict({name!r}): got {decision!r}; build a Decision with results.number, "
+                              "order, not_comparable, qualitative or combined instead of typing a verdict")
         full = f"{self.chapter}.{name}"
-        num = Number(full, math.nan, math.nan, math.nan, "verdict", self.chapter, what, "verdict", None, verdict_, source)
+        num = Number(full, math.nan, math.nan, math.nan, "verdict", self.chapter, what, "verdict", None,
+                     decision.verdict, source, decision.inputs)
         self.numbers[full] = num
         return num
 
@@ -138,6 +351,8 @@ def _numbers(obj: Any, path: Path) -> dict[str, Number]:
             num = Number(**n)
         except TypeError as e:
             raise DataError(f"results file {path}: a malformed number ({e}); rebuild the book") from None
+        if num.decision is not None and not (isinstance(num.decision, dict) and num.decision.get("rule") in RULES):
+            raise DataError(f"results file {path}: number {num.name!r} has a malformed decision; rebuild the book")
         out[num.name] = num
     return out
 
@@ -161,6 +376,25 @@ def load(path: str | Path) -> dict[str, Number]:
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
         raise DataError(f"results file {p}: cannot be read ({type(e).__name__}); rebuild the book") from None
     return _numbers(obj, p)
+
+
+def recompute(numbers: dict[str, Number]) -> list[str]:
+    """The names (in order) of the numbers whose stored verdict is not what :func:`decide` makes of their
+    stored decision: empty for a sound file. A verdict without a decision (typed, or from a file written
+    before decisions were stored) cannot be decided again and is listed; so is a malformed decision."""
+    wrong = []
+    for name, n in numbers.items():
+        if n.decision is None:
+            if n.verdict is not None:
+                wrong.append(name)
+            continue
+        try:
+            again = decide(n.decision)
+        except ConfigError:
+            again = None
+        if again != n.verdict:
+            wrong.append(name)
+    return wrong
 
 
 @dataclass(frozen=True)

@@ -123,3 +123,20 @@ def long_memory_configs(cfg: TrainConfig, p: Preset, fps: float) -> list[TrainCo
     """The length sweep at ``p.long_lengths`` with :func:`long_memory_config`, one per (dims, length, seed)."""
     return [long_memory_config(dataclasses.replace(cfg, dims=d, length=L, seed=s), fps)
             for d in BOTH for L in p.long_lengths for s in p.long_seeds]
+
+
+def factorial_configs(cfg: TrainConfig, p: Preset, fps: float) -> list[tuple[str, str, TrainConfig]]:
+    """The paper's explanation of Figure 4, one factor at a time: at the longest input, truncation (``cfg``'s
+    frames, or the whole input) x the forget gates' start (``cfg``'s constant bias, or chrono), for Z and
+    X, Y, Z with ``p.long_seeds``: ``(truncation, forget start, config)`` per run. Two cells are runs the
+    length sweep and the long-memory test already have."""
+    L = max(p.long_lengths)
+    out = []
+    for d in BOTH:
+        for s in p.long_seeds:
+            base = dataclasses.replace(cfg, dims=d, length=L, seed=s)
+            whole = base.n_frames(fps)
+            for trunc, k in ((f"{cfg.truncation} frames", cfg.truncation), ("the whole input", max(cfg.truncation, whole))):
+                for forget in ("constant", "chrono"):
+                    out.append((trunc, forget, dataclasses.replace(base, truncation=k, forget_init=forget)))
+    return out

@@ -157,6 +157,13 @@ class Runner:
         rows = self.rows(cfgs, "dims", "length", "truncation", desc="long memory")
         return [r | {"frames": c.n_frames(self.fps)} for r, c in zip(rows, cfgs)]
 
+    def factorial(self, cfg: TrainConfig) -> list[dict]:
+        """Figure 4's explanation one factor at a time (``paper.factorial_configs``): one row per (truncation,
+        forget start, dims, seed) at the longest input."""
+        plan = paper.factorial_configs(cfg, self.preset, self.fps)
+        rows = self.rows([c for _, _, c in plan], "dims", "length", desc="truncation x forget start")
+        return [r | {"truncated": trunc, "forget": forget} for (trunc, forget, _), r in zip(plan, rows)]
+
     def baseline_runs(self) -> list[dict]:
         """The physics baseline for Z and X, Y, Z at the preset's length: one row per dims (it has no seed)."""
         out = []
@@ -211,23 +218,33 @@ class Runner:
         ob = ob or self.observation()
         return dataclasses.replace(cfg, observe="randomised", observe_noise=ob.noise, observe_drop=ob.drop)
 
-    def recommended(self, cfg: TrainConfig, seed: int = 0,
-                    ob: observe.Observation | None = None) -> tuple[str, dict[str, Interval], train.TrainedModel]:
-        """The Z model a camera in a car should use: of Table 1's (``cfg``, trained on exact positions) and the
-        one trained on random observations, the one with the higher accuracy on ``seed``'s validation
-        trajectories observed as the calibrated tracker (or ``ob``) observes them (never the test split).
+    def candidates(self, cfgs: dict[str, TrainConfig], ob: observe.Observation | None = None) -> dict[str, TrainConfig]:
+        """Each of ``cfgs`` (name -> config) trained on exact positions and on random observations (names
+        suffixed ', exact' and ', randomised'): the models a camera in a car could use, all on Z."""
+        out = {}
+        for name, cfg in cfgs.items():
+            z = dataclasses.replace(cfg, dims="z")
+            out[f"{name}, exact"] = z
+            out[f"{name}, randomised"] = self.randomised_config(z, ob)
+        return out
 
-        Returns ``("faithful" | "randomised", {name: validation interval}, the chosen model)``.
+    def recommended(self, candidates: dict[str, TrainConfig], seed: int = 0,
+                    ob: observe.Observation | None = None) -> tuple[str, dict[str, Interval], dict[str, train.TrainedModel]]:
+        """The Z model a camera in a car should use: of ``candidates`` (name -> config; :meth:`candidates`), the
+        one with the highest accuracy on ``seed``'s validation trajectories observed as the calibrated tracker
+        (or ``ob``) observes them (never the test split).
+
+        Returns ``(the chosen name, {name: validation interval}, {name: model})``.
         """
         ob = ob or self.observation()
-        z = dataclasses.replace(cfg, dims="z", seed=seed)
-        models = {"faithful": self.trained(z), "randomised": self.trained(self.randomised_config(z, ob))}
-        _, va = train.split_train_val(len(self.dataset.train.y), cfg.val_fraction, seed)
-        T = cfg.n_frames(self.fps)
+        models = {k: self.trained(dataclasses.replace(c, dims="z", seed=seed)) for k, c in candidates.items()}
+        first = next(iter(candidates.values()))
+        _, va = train.split_train_val(len(self.dataset.train.y), first.val_fraction, seed)
+        T = first.n_frames(self.fps)
         x_val = ob.observe(self.dataset.train.x[va, :T], self.fps, seed=6)
         val = {k: scored([m], x_val, self.dataset.train.y[va]) for k, m in models.items()}
-        choice = max(val, key=lambda k: val[k].value)
-        return choice, val, models[choice]
+        choice = max(val, key=lambda k: val[k].value)  # ties: the first candidate
+        return choice, val, models
 
     def rocket(self, dims: Dims, n_frames: int, seed: int, tests: dict[str, np.ndarray],
                train_x: np.ndarray | None = None) -> dict[str, np.ndarray]:
@@ -244,6 +261,19 @@ class Runner:
         """This runner on the same throws with the air removed (the random streams do not depend on ``air``)."""
         cfg = synth.SynthConfig.from_dict(self.dataset.meta["config"]).replace(air=False)
         return self.on(synth.dataset(cfg, int(self.dataset.meta["seed"]), data_dir=self.data_dir, progress=False))
+
+    def in_engine(self, engine: str) -> Runner:
+        """This runner on the same throws, without air, simulated by ``engine`` ('mujoco' or 'bullet'): the same
+        sampled objects and launches, index by index."""
+        cfg = synth.SynthConfig.from_dict(self.dataset.meta["config"]).replace(air=False, engine=engine)
+        return self.on(synth.dataset(cfg, int(self.dataset.meta["seed"]), data_dir=self.data_dir,
+                                     progress=self.progress))
+
+    def with_data_seed(self, seed: int) -> Runner:
+        """This runner on another data set of the same study: the same config simulated from ``seed`` (new
+        throws from the same priors), cached like the first."""
+        cfg = synth.SynthConfig.from_dict(self.dataset.meta["config"])
+        return self.on(synth.dataset(cfg, seed, data_dir=self.data_dir, progress=self.progress))
 
     def saved(self, dataset: Dataset, name: str) -> Dataset:
         """An in-memory ``dataset`` (one with a key but no file) written to the cache once, so that workers read

@@ -70,3 +70,29 @@ def long_input_effect(summary: list[dict], dims: str) -> dict[str, Any]:
     hurts = best is not last and drop > 0 and not best["interval"].overlaps(last["interval"])
     return {"dims": dims, "best_length": best["length"], "best_mean": best["mean"], "last_length": last["length"],
             "last_mean": last["mean"], "drop": drop, "hurts": bool(hurts)}
+
+
+def intervals_agree(intervals: Sequence[Interval]) -> bool:
+    """Whether every pair of ``intervals`` overlaps: the seeds of a number agree, none differs significantly from
+    another. False when the seeds split into groups (some trained, some stalled): the pooled mean of such seeds
+    is not yet a number."""
+    return all(a.overlaps(b) for i, a in enumerate(intervals) for b in intervals[i + 1:])
+
+
+def mean_difference(a: np.ndarray, b: np.ndarray, n_boot: int = 2000, seed: int = 0) -> Interval:
+    """The mean of ``a`` (n,) minus the mean of ``b`` (m,), two independent samples, with a percentile bootstrap
+    interval (each resampled within itself), 95 %."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    rng = np.random.default_rng(seed)
+    stats = rng.choice(a, (n_boot, len(a))).mean(1) - rng.choice(b, (n_boot, len(b))).mean(1)
+    lo, hi = np.quantile(stats, [0.025, 0.975])
+    return Interval(float(a.mean() - b.mean()), float(lo), float(hi),
+                    f"bootstrap of the difference of two means ({len(a)} and {len(b)} throws)")
+
+
+def bootstrap_mean(values: np.ndarray, n_boot: int = 2000, seed: int = 0) -> Interval:
+    """The mean of ``values`` (n,) with a percentile bootstrap interval over them, 95 %."""
+    v = np.asarray(values, float)
+    rng = np.random.default_rng(seed)
+    lo, hi = np.quantile(rng.choice(v, (n_boot, len(v))).mean(1), [0.025, 0.975])
+    return Interval(float(v.mean()), float(lo), float(hi), f"bootstrap over {len(v)} values")

@@ -20,7 +20,7 @@ import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 import mujoco
 import numpy as np
@@ -39,6 +39,9 @@ from study.simulate.scene import Shape, compile_scene
 
 GRAVITY = 9.81
 """m/s^2, MuJoCo's default |gravity|."""
+Engine = Literal["mujoco", "bullet"]
+"""The physics engines a data set can be simulated with."""
+ENGINES: tuple[Engine, ...] = get_args(Engine)
 STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
 SLEEP_STEPS = mujoco.mjMINAWAKE
 """Consecutive steps an object's speeds must stay under the sleep tolerance before MuJoCo puts it to sleep."""
@@ -136,6 +139,9 @@ class SynthConfig:
     """Prior of the heavy (label 1, must avoid) class."""
     launch: LaunchPrior = field(default_factory=LaunchPrior)
     """Prior of the launch state, shared by both classes."""
+    engine: Engine = "mujoco"
+    """The physics engine that simulates the throws: 'mujoco' (the study's), or 'bullet' (the paper's, through
+    Blender: ``study.simulate.bullet``; no air, the same sampled objects and launches)."""
 
     @classmethod
     def preset(cls, name: str) -> SynthConfig:
@@ -206,6 +212,11 @@ class SynthConfig:
                 f"sqrt(SynthConfig.stiffness) * SynthConfig.timestep = {resolution:.3f} exceeds 0.3: the contact is "
                 f"under-resolved and can gain energy; lower the timestep or the stiffness"
             )
+        if self.engine not in ENGINES:
+            raise ConfigError(f"SynthConfig.engine = {self.engine!r} is unknown; use one of {', '.join(ENGINES)}")
+        if self.engine == "bullet" and self.air:
+            raise ConfigError("SynthConfig.air = True with engine 'bullet': Bullet has no air drag; set air=False "
+                              "(the comparison is with MuJoCo's air-off data of the same throws)")
         self.shape.validate("SynthConfig.shape")
         self.light.validate("SynthConfig.light")
         self.heavy.validate("SynthConfig.heavy")
@@ -213,7 +224,12 @@ class SynthConfig:
 
     def validate_calibration(self) -> None:
         """Raise :class:`ConfigError` if a class asks for a restitution the contact calibration cannot give."""
-        lo, hi = restitution_range(self.shape, self.stiffness, self.timestep)
+        if self.engine == "bullet":
+            from study.simulate import bullet
+
+            lo, hi = bullet.restitution_range(self.shape)
+        else:
+            lo, hi = restitution_range(self.shape, self.stiffness, self.timestep)
         for name in CLASSES:
             r = self.prior(name).restitution
             if r[0] < lo or r[1] > hi:
@@ -231,10 +247,11 @@ class SynthConfig:
         """Inverse of :meth:`to_dict`; raises :class:`ConfigError` on unknown or missing fields.
 
         A dict without ``sleep_tolerance`` is from a file written before sleeping existed, when every
-        object stayed awake: it reads as ``sleep_tolerance=0``.
+        object stayed awake: it reads as ``sleep_tolerance=0``; one without ``engine``, from before Bullet,
+        was simulated by MuJoCo.
         """
         try:
-            d = {"sleep_tolerance": 0.0, **d}
+            d = {"sleep_tolerance": 0.0, "engine": "mujoco", **d}
             tup = lambda v: tuple(v) if isinstance(v, list) else v  # noqa: E731
             return cls(
                 **{k: v for k, v in d.items() if k not in ("shape", "light", "heavy", "launch")},
@@ -426,17 +443,22 @@ def simulate_reference(cfg: SynthConfig, params: dict[str, np.ndarray]) -> np.nd
 
 def cache_key(cfg: SynthConfig, seed: int) -> str:
     """Content key of the dataset ``(cfg, seed)`` makes: config, seed, code and library versions."""
-    return cache.key({"config": cfg.to_dict(), "seed": seed, **provenance()})
+    return cache.key({"config": cfg.to_dict(), "seed": seed, **provenance(cfg.engine)})
 
 
-def provenance() -> dict[str, str]:
-    """Versions that can change the simulated numbers."""
-    return {
+def provenance(engine: Engine = "mujoco") -> dict[str, str]:
+    """Versions that can change the simulated numbers (for Bullet, its code and version too)."""
+    out = {
         "study": __version__,
         "code": cache.source_hash("simulate.synth", "simulate.contact", "simulate.scene"),
         "mujoco": mujoco.__version__,
         "numpy": np.__version__,
     }
+    if engine == "bullet":
+        from importlib.metadata import version
+
+        out |= {"bullet_code": cache.source_hash("simulate.bullet"), "pybullet": version("pybullet")}
+    return out
 
 
 def generate(cfg: SynthConfig, seed: int = 0, *, threads: int | None = None, progress: bool = True) -> data.Dataset:
@@ -448,12 +470,18 @@ def generate(cfg: SynthConfig, seed: int = 0, *, threads: int | None = None, pro
     splits = {}
     for name in data.SPLITS:
         params = sample_split(cfg, seed, name)
-        x = simulate(cfg, params, threads=threads, progress=progress, desc=f"simulating {name}")
+        if cfg.engine == "bullet":
+            from study.simulate import bullet
+
+            x = bullet.simulate(cfg, params, processes=(os.cpu_count() or 1) if threads is None else threads,
+                                progress=progress, desc=f"simulating {name} (Bullet)")
+        else:
+            x = simulate(cfg, params, threads=threads, progress=progress, desc=f"simulating {name}")
         if not np.all(np.isfinite(x)):
             raise RuntimeError("simulation produced non-finite positions")  # a bug, not bad input
         label = params.pop("label")
         splits[name] = data.Split(x=x.astype(np.float32), y=label, params=params)
-    meta = {"key": cache_key(cfg, seed), "config": cfg.to_dict(), "seed": seed, "versions": provenance()}
+    meta = {"key": cache_key(cfg, seed), "config": cfg.to_dict(), "seed": seed, "versions": provenance(cfg.engine)}
     return data.Dataset(train=splits["train"], test=splits["test"], fps=cfg.fps, meta=meta)
 
 
