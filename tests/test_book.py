@@ -201,7 +201,7 @@ def test_build_executes_injects_and_renders(tiny: Path) -> None:
     assert glued(tiny, "alpha", "preset") == "'smoke'"
     hashseed, mujoco_gl, study_file = ast.literal_eval(glued(tiny, "alpha", "env"))
     assert hashseed == "0" and mujoco_gl == os.environ.get("MUJOCO_GL", "egl")
-    assert Path(study_file).resolve() == Path(book.__file__).resolve().parent / "__init__.py"
+    assert Path(study_file).resolve() == Path(book.__file__).resolve().parent.parent / "__init__.py"
     html = (tiny / "_build" / "html" / "book" / "alpha.html").read_text()
     assert "Preset:" in html and "smoke" in html
     assert (tiny / "_build" / "html" / "index.html").is_file()

@@ -8,6 +8,7 @@ test splits, exact and through the calibrated tracker.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -122,3 +123,13 @@ def transfer(cells: list[Cross], learner: str, column: motion.Column) -> dict[st
         if (e, e) in by and (e, other) in by:
             out[e] = bootstrap_difference(by[e, other].correct, by[e, e].correct)
     return out
+
+
+def plan(runners: dict[str, Any], cfgs: dict[str, TrainConfig], cols: list[motion.Column], seeds: tuple[int, ...],
+         table1_seeds: tuple[int, ...]) -> list[tuple[Any, list[TrainConfig], bool]]:
+    """Every network run of the chapter, as ``Runner.prefetch`` takes them: the cross-engine networks in each
+    engine and column, and Table 1's positions network on X, Y, Z and Z with ``table1_seeds``."""
+    table1 = [dataclasses.replace(cfgs["lstm_positions"], dims=d, seed=s) for d in ("z", "xyz") for s in table1_seeds]
+    return [(r, [dataclasses.replace(motion.trained_config(cfgs[n], c), seed=s)
+                 for c in cols for n in ("lstm_positions", "lstm_velocity") for s in seeds] + table1, True)
+            for r in runners.values()]

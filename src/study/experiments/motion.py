@@ -93,6 +93,23 @@ def trained_config(cfg: TrainConfig, column: Column) -> TrainConfig:
     return dataclasses.replace(cfg, dims="z", observe="fixed", observe_noise=column.noise, observe_drop=column.drop)
 
 
+def network_configs(cfgs: dict[str, TrainConfig], column: Column) -> dict[str, TrainConfig]:
+    """The config of every network row in ``column``: each of :data:`NETWORKS` trained on the column's condition,
+    and, in an observed column, Table 1's network trained on exact positions."""
+    out = {name: trained_config(cfgs[name], column) for name in NETWORKS}
+    if column.noise is not None:
+        out["lstm_exact_trained"] = dataclasses.replace(cfgs["lstm_exact_trained"], dims="z")
+    return out
+
+
+def plan(runners: dict[bool, Any], cfgs: dict[str, TrainConfig], cols: list[Column],
+         seeds: tuple[int, ...]) -> list[tuple[Any, list[TrainConfig], bool]]:
+    """Every network run of the table, as ``Runner.prefetch`` takes them: ``runners`` maps air on / off to the
+    runner on that data."""
+    return [(runners[c.air], [dataclasses.replace(cfg, seed=s) for cfg in network_configs(cfgs, c).values()
+                              for s in seeds], True) for c in cols]
+
+
 def _z_only(x: np.ndarray) -> np.ndarray:
     """(n, T, 3) with x = y = 0: what the one-feature rules and the baseline of one camera see."""
     out = np.zeros_like(x)
@@ -133,10 +150,7 @@ def column_cells(runner: Any, cfgs: dict[str, TrainConfig], column: Column, seed
     x_test = ds.test.x[:, :T] if ob is None else ob.observe(ds.test.x[:, :T], ds.fps, seed=salt)
     x_train = ds.train.x[:, :T] if ob is None else ob.observe(ds.train.x[:, :T], ds.fps, seed=salt + 50)
     out = []
-    for name in NETWORKS + ("lstm_exact_trained",):
-        if name == "lstm_exact_trained" and ob is None:
-            continue  # the same runs as the positions row
-        cfg = dataclasses.replace(cfgs[name], dims="z") if name == "lstm_exact_trained" else trained_config(cfgs[name], column)
+    for name, cfg in network_configs(cfgs, column).items():
         rows = runner.train_runs(cfg, ("z",), seeds, desc=f"{column.key} {name}")
         models = runner.models(cfg, seeds, dims="z")
         correct = np.stack([m.predict_proba(x_test).argmax(1) == y for m in models])

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -89,6 +90,18 @@ class Runner:
             self.plan.add(self.dataset, c, self.data_dir, test)
         return runs.run_all(self.dataset, cfgs, self.data_dir, test, desc=desc, progress=self.progress,
                             workers=self.workers or None, scheduler=self.scheduler or None)
+
+    def prefetch(self, batches: Iterable[tuple[Runner, Sequence[TrainConfig], bool]], desc: str = "runs") -> None:
+        """Train (or read) every run of ``batches`` -- (runner, configs, scored on the test split?) -- at once,
+        before the experiments ask for them one by one: one pool for a whole chapter keeps every core busy,
+        where experiments of three seeds each on two cores would leave one idle at the end of each."""
+        jobs = []
+        for r, cfgs, test in batches:
+            for c in cfgs:
+                r.plan.add(r.dataset, c, r.data_dir, test)
+                jobs.append((r.dataset, c, test))
+        runs.run_many(jobs, self.data_dir, desc=desc, progress=self.progress, workers=self.workers or None,
+                      scheduler=self.scheduler or None)
 
     def rows(self, cfgs: list[TrainConfig], *fields: str, test: bool = True, desc: str = "runs") -> list[dict]:
         """The tidy rows of ``cfgs`` (``runs.row``): the named config fields and each run's numbers."""

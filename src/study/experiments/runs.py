@@ -235,46 +235,59 @@ def client(scheduler: str, workers: int = 0):
 
 
 @contextlib.contextmanager
-def _executor(dataset: Dataset, n: int, workers: int, scheduler: str | None) -> Iterator[tuple[Executor, Any]]:
-    """An executor for ``n`` runs on ``dataset`` and what to send its workers for the dataset: its path for a
+def _executor(datasets: Sequence[Dataset], n: int, workers: int, scheduler: str | None) -> Iterator[tuple[Executor, list]]:
+    """An executor for ``n`` runs on ``datasets`` and what to send its workers for each dataset: its path for a
     local pool (each worker reads the file once), or a Dask future of it scattered to every worker once."""
     if scheduler:
         c = client(scheduler, workers)
-        yield c.get_executor(), c.scatter(dataset, broadcast=True, hash=False)
+        yield c.get_executor(), [c.scatter(ds, broadcast=True, hash=False) for ds in datasets]
         return
-    ref: Dataset | str = str(dataset.path) if dataset.path is not None else dataset
+    refs: list = [str(ds.path) if ds.path is not None else ds for ds in datasets]
     ctx = multiprocessing.get_context("spawn")  # no fork of a process that holds torch threads
     with ProcessPoolExecutor(min(workers, n), mp_context=ctx) as pool:
-        yield pool, ref
+        yield pool, refs
 
 
-def run_all(dataset: Dataset, cfgs: Sequence[TrainConfig], data_dir: str | Path, test: bool, *, desc: str = "runs",
-            progress: bool = False, workers: int | None = None, scheduler: str | None = None) -> list[dict]:
-    """The records of ``cfgs`` in order: cached ones read, the others trained, in ``workers`` local processes
-    (``None``: :func:`default_workers`) or on the Dask ``scheduler``.
+def run_many(jobs: Sequence[tuple[Dataset, TrainConfig, bool]], data_dir: str | Path, *, desc: str = "runs",
+             progress: bool = False, workers: int | None = None, scheduler: str | None = None) -> list[dict]:
+    """The records of ``jobs`` (dataset, config, scored on the test split?) in order: cached ones read, the others
+    trained together, in ``workers`` local processes (``None``: :func:`default_workers`) or on the Dask
+    ``scheduler``, longest inputs first, so that no core idles while another run could start.
 
     Every run is seeded and single-threaded (see :mod:`study.learn.train`), so running them in parallel
     processes, or on a cluster, gives the same records as running them one by one (tested).
     """
     workers = default_workers() if workers is None else workers
-    records = [cached(dataset, c, data_dir, test) for c in cfgs]
+    records = [cached(ds, c, data_dir, test) for ds, c, test in jobs]
     todo = [i for i, r in enumerate(records) if r is None]
     # Longest inputs first, so the last runs to finish are short ones and no core idles long at the end.
-    todo.sort(key=lambda i: -cfgs[i].n_frames(dataset.fps))
-    note = f"{len(cfgs) - len(todo)} of {len(cfgs)} cached" if len(todo) < len(cfgs) else ""
+    todo.sort(key=lambda i: -jobs[i][1].n_frames(jobs[i][0].fps))
+    note = f"{len(jobs) - len(todo)} of {len(jobs)} cached" if len(todo) < len(jobs) else ""
     with Progress(desc, total=len(todo), show=progress and bool(todo), note=note, unit="run") as bar:
         if scheduler or (workers > 1 and len(todo) > 1):
-            with _executor(dataset, len(todo), workers, scheduler) as (pool, ref):
-                futures = {pool.submit(train_task, ref, cfgs[i], str(data_dir), test, run_key(dataset, cfgs[i], test)): i
-                           for i in todo}
+            datasets = list({id(jobs[i][0]): jobs[i][0] for i in todo}.values())
+            index = {id(ds): k for k, ds in enumerate(datasets)}
+            with _executor(datasets, len(todo), workers, scheduler) as (pool, refs):
+                futures = {}
+                for i in todo:
+                    ds, c, test = jobs[i]
+                    futures[pool.submit(train_task, refs[index[id(ds)]], c, str(data_dir), test, run_key(ds, c, test))] = i
                 for f in as_completed(futures):
                     records[futures[f]] = f.result()
                     bar.update()
         else:
             for i in todo:
-                records[i] = run(dataset, cfgs[i], data_dir, test)
+                ds, c, test = jobs[i]
+                records[i] = run(ds, c, data_dir, test)
                 bar.update()
     return records
+
+
+def run_all(dataset: Dataset, cfgs: Sequence[TrainConfig], data_dir: str | Path, test: bool, *, desc: str = "runs",
+            progress: bool = False, workers: int | None = None, scheduler: str | None = None) -> list[dict]:
+    """:func:`run_many` of ``cfgs`` on one ``dataset``."""
+    return run_many([(dataset, c, test) for c in cfgs], data_dir, desc=desc, progress=progress, workers=workers,
+                    scheduler=scheduler)
 
 
 # ---------------------------------------------------------------------------------------------
