@@ -15,6 +15,15 @@ seeds only, for a check that costs 60 % of Table 1's training.
     python scripts/rebuild_check.py --results _build/results.json --backend torch --out table1-torch.json
     python scripts/rebuild_check.py --results _build/results.json --data-seed 1 --out table1-seed1.json
     python scripts/rebuild_check.py --results _build/results.json --light-priors balls --out table1-balls.json
+
+With ``--chapters table1 decision ...`` it re-executes whole chapters of the book instead, the chapters
+themselves (no copy of their logic), on the PyTorch time loops (``--backend torch``), in a scratch book that
+shares the project's data folder: its data sets, videos and calibration are reused, while every training run
+has another key (the time loop is part of it) and is trained again. The chapters' numbers, every headline
+the summary page quotes from them included, land in ``--out``:
+
+    python scripts/rebuild_check.py --chapters table1 decision --backend torch --out torch.json
+    study results _build/results.json --compare torch.json --all
 """
 
 from __future__ import annotations
@@ -37,9 +46,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=0, help="train only the first N of the preset's seeds (0: all)")
     ap.add_argument("--workers", type=int, default=0, help="training processes (0: one per CPU)")
     ap.add_argument("--out", type=Path, required=True, help="results file to write")
+    ap.add_argument("--chapters", nargs="+", metavar="CHAPTER", default=None,
+                    help="re-execute these chapters of the book (file stems) instead of Table 1's runs alone")
     a = ap.parse_args(argv)
     if a.backend == "torch":
         os.environ["STUDY_NATIVE"] = "0"  # before study.learn.native is imported, here and in the workers
+    if a.chapters:
+        return chapters(a.chapters, a.preset, a.data_dir, a.out)
 
     import dataclasses
 
@@ -73,6 +86,38 @@ def main(argv: list[str] | None = None) -> int:
     for n in results.load(a.out).values():
         print(f"{n.name}: {results.fmt(n)}")
     print(f"written: {a.out}", file=sys.stderr)
+    return 0
+
+
+def chapters(stems: list[str], preset: str, data_dir: Path, out: Path) -> int:
+    """Execute the book's chapters ``stems`` in a scratch book beside the project (its own _build, the project's
+    data folder) and write their merged results to ``out``."""
+    import shutil
+
+    from study.book import builder
+
+    root = Path(__file__).resolve().parents[1]
+    known = [c.stem for c in builder.chapters(root)]
+    unknown = [s for s in stems if s not in known]
+    if unknown:
+        print(f"rebuild_check: no chapter {', '.join(unknown)}; the chapters are {', '.join(known)}", file=sys.stderr)
+        return 2
+    clips = root.parent / "shared" / "data" / "real-video"  # the real-world chapter's clips, read where they lie
+    if clips.is_dir():
+        os.environ.setdefault("STUDY_REAL_VIDEO", str(clips))
+    with tempfile.TemporaryDirectory(prefix="rebuild-check-") as tmp:
+        scratch = Path(tmp)
+        for name in ("book", "src", "_config.yml", "references.bib"):
+            (scratch / name).symlink_to(root / name)
+        data_dir.mkdir(parents=True, exist_ok=True)
+        (scratch / "data").symlink_to(data_dir.resolve())
+        (scratch / "_toc.yml").write_text("format: jb-book\nroot: book/" + stems[0] + "\n"
+                                          + ("chapters:\n" + "".join(f"  - file: book/{s}\n" for s in stems[1:])
+                                             if stems[1:] else ""))
+        builder.execute(scratch, preset)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(scratch / "_build" / "results.json", out)
+    print(f"written: {out}", file=sys.stderr)
     return 0
 
 

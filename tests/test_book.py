@@ -400,6 +400,11 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
             assert text.count("<img") >= pngs, ch.stem
             figures += pngs
     assert figures >= 9  # the smoke book has nine figures at least, each an image
+    from study.book import results
+
+    built = results.load(tmp_path / results.FILE)
+    decided = [n for n in built.values() if n.verdict]
+    assert len(decided) >= 15 and results.recompute(built) == [], "every verdict follows from its stored inputs"
 
 
 def test_chapters_show_the_code_that_teaches_not_the_plumbing() -> None:
@@ -418,3 +423,30 @@ def test_chapters_show_the_code_that_teaches_not_the_plumbing() -> None:
             assert all(len(line) <= 90 for line in lines), f"{source.name}, code cell {i}: a line over 90 characters"
             if "hide-input" not in tags:
                 assert not any("glue(" in line for line in lines), f"{source.name}, code cell {i}: glue in a shown cell"
+
+
+def test_no_chapter_types_a_verdict() -> None:
+    """Verdicts are decided by study.book.results from numbers, never written: no code cell of any chapter passes a
+    verdict word as a string literal to anything that records or builds a verdict, or compares a verdict with one
+    to choose another."""
+    import jupytext
+
+    from study.book import results
+
+    words = set(results.VERDICTS)
+    takers = {"verdict", "add", "Decision", "combine"}
+    for source in sorted((REPO / "book").glob("*.md")):
+        nb = jupytext.read(source, fmt="md:myst")
+        for i, cell in enumerate(c for c in nb.cells if c.cell_type == "code"):
+            code = "\n".join(ln for ln in cell.source.splitlines() if not ln.lstrip().startswith(("%", "!")))
+            for node in ast.walk(ast.parse(code)):
+                if not isinstance(node, ast.Call):
+                    continue
+                name = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
+                if name not in takers:
+                    continue
+                args = list(node.args) + [k.value for k in node.keywords]
+                for a in args:
+                    for leaf in ast.walk(a):
+                        assert not (isinstance(leaf, ast.Constant) and leaf.value in words), \
+                            f"{source.name}, code cell {i}: the verdict {leaf.value!r} is typed in a call to {name}()"

@@ -272,3 +272,22 @@ def test_numbers_print_as_the_chapters_print_them():
     assert results.fmt(n) == "1.3 % [0.8, 2.2]"  # percentages to a tenth of a point, not 3 digits
     assert results.fmt(results.Number("x.count", 14, 14, 14, "count", "table1", unit="count")) == "14"
     assert results.fmt_value(0.0141, "m") == "0.0141 m"
+
+
+@pytest.mark.slow  # executes the data chapter in a scratch book
+def test_rebuild_check_reexecutes_whole_chapters_into_a_results_file(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "scripts" / "rebuild_check.py"
+    proc = subprocess.run([sys.executable, str(script), "--chapters", "data", "--preset", "smoke", "--data-dir",
+                           str(tmp_path / "data"), "--out", str(tmp_path / "again.json")],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    again = results.load(tmp_path / "again.json")
+    assert again and all(n.startswith("data.") for n in again), "the chapter's own numbers, as the book names them"
+    assert list((tmp_path / "data").glob("synth-*.npz")), "into the data folder it was given"
+    bad = subprocess.run([sys.executable, str(script), "--chapters", "nonesuch", "--out", str(tmp_path / "x.json")],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "no chapter nonesuch" in bad.stderr
