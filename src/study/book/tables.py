@@ -52,3 +52,21 @@ def runs_note(summary: Mapping[str, Any]) -> str:
     if summary.get("capped"):
         parts.append(f"{summary['capped']} at the epoch cap")
     return ", ".join(parts)
+
+
+def seeds_ci(correct: Any, digits: int = 1) -> str:
+    """A mean over a few seeds as the book shows every one: ``'81.2 % [79.9, 82.4]; t [78.0, 84.1]; 80.1 · 81.5 ·
+    82.0'`` -- the bootstrap interval over test throws and seeds, the Student-t interval over the seeds' own
+    accuracies, and each seed's. ``correct``: (S, n) bool, seed s got test throw i right."""
+    import numpy as np
+
+    from study.learn.metrics import bootstrap_accuracy, t_interval
+
+    c = np.atleast_2d(np.asarray(correct, dtype=bool))
+    iv = bootstrap_accuracy(c)
+    if len(c) == 1:
+        return pct_ci(iv, digits)
+    per = c.mean(axis=1)
+    t = t_interval(per)
+    return (f"{pct_ci(iv, digits)}; t [{100 * t.lo:.{digits}f}, {100 * t.hi:.{digits}f}]; "
+            + " · ".join(f"{100 * a:.{digits}f}" for a in per))
