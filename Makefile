@@ -4,6 +4,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 PRESET ?= paper
+SCHEDULER ?=
 export MUJOCO_GL ?= egl
 export PYTHONHASHSEED := 0
 
@@ -18,9 +19,10 @@ $(BIN)/.installed: requirements.txt pyproject.toml
 
 install: $(BIN)/.installed
 
-## Execute every chapter with papermill (PRESET=paper by default) and build the HTML book in _build/html.
+## Execute every chapter with papermill (PRESET=paper by default) and build the HTML book in _build/html;
+## SCHEDULER=local (or a Dask scheduler's address) trains the chapters' runs on a Dask cluster.
 book: $(BIN)/.installed
-	$(BIN)/study book --preset $(PRESET)
+	$(BIN)/study book --preset $(PRESET) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 ## Unit tests and smoke runs of the real entry points (smoke presets).
 test: $(BIN)/.installed
