@@ -211,6 +211,10 @@ def train_task(dataset: Dataset | str, cfg: TrainConfig, data_dir: str, test: bo
     return run(ds, cfg, data_dir, test)
 
 
+_CLUSTERS: list = []
+"""The LocalClusters this process started, kept alive as long as it runs."""
+
+
 @lru_cache(maxsize=1)
 def _local_cluster(workers: int) -> str:
     """The address of a ``LocalCluster`` started once per process: one single-threaded worker process per
@@ -219,7 +223,7 @@ def _local_cluster(workers: int) -> str:
 
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                            dashboard_address=None)
-    _local_cluster.clusters = getattr(_local_cluster, "clusters", []) + [cluster]  # kept alive with the process
+    _CLUSTERS.append(cluster)
     return cluster.scheduler_address
 
 
