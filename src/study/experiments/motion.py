@@ -145,7 +145,7 @@ def column_cells(runner: Any, cfgs: dict[str, TrainConfig], column: Column, seed
     T = cfgs["lstm_positions"].n_frames(ds.fps)
     y = np.asarray(ds.test.y)
     ob = column.observation()
-    index = list(LEARNERS).index  # each column draws its own observation, the same for every learner
+    # Each column draws its own observation of the test (and training) throws, the same for every learner.
     salt = 100 * (2 if column.air else 3) + ["exact", "near", "calibrated", "far"].index(column.name)
     x_test = ds.test.x[:, :T] if ob is None else ob.observe(ds.test.x[:, :T], ds.fps, seed=salt)
     x_train = ds.train.x[:, :T] if ob is None else ob.observe(ds.train.x[:, :T], ds.fps, seed=salt + 50)
@@ -164,7 +164,7 @@ def column_cells(runner: Any, cfgs: dict[str, TrainConfig], column: Column, seed
     rules = cues.rules(_z_only(x_train), ds.train.y, _z_only(x_test), y, ds.fps, contact_height, names=RULE_FEATURES)
     best = max(rules, key=lambda r: r["train_accuracy"])  # chosen on the training split
     out.append(Cell("rule", column, best["correct"][None], feature=best["feature"]))
-    out.sort(key=lambda c: index(c.learner))
+    out.sort(key=lambda c: LEARNERS.index(c.learner))
     return out
 
 
