@@ -89,3 +89,17 @@ def test_every_seed_and_a_t_interval_beside_the_bootstrap():
     assert tables.seeds_ci(c[:1]) == tables.pct_ci(bootstrap_accuracy(c[0])), "one seed: no t-interval"
     dv = stats.mean_difference(np.full(50, 3.0), np.full(40, 1.0))
     assert dv.value == 2.0 and dv.lo == dv.hi == 2.0
+
+
+def test_a_column_draws_the_same_noise_for_every_engine_and_its_own_per_column():
+    from study.simulate.data import Dataset, Split
+
+    rng = np.random.default_rng(0)
+    split = lambda: Split(rng.random((4, 40, 3)), np.array([0, 1, 0, 1]), {})  # noqa: E731
+    ds = Dataset(train=split(), test=split(), fps=30.0)
+    cols = motion.columns(CAL)
+    exact, cal_on, cal_off = cols[0], cols[2], cols[6]
+    assert all(np.array_equal(a, b) for a, b in zip(exact.inputs(ds, 30), (ds.train.x[:, :30], ds.test.x[:, :30])))
+    a, b = cal_off.inputs(ds, 30), cal_off.inputs(ds, 30)
+    assert np.array_equal(a[1], b[1], equal_nan=True), "the same column draws the same noise"
+    assert not np.array_equal(a[1], cal_on.inputs(ds, 30)[1], equal_nan=True), "air on and off draw apart"

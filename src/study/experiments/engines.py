@@ -66,22 +66,12 @@ class Cross:
         return bootstrap_accuracy(self.correct)
 
 
-def _inputs(ds: Dataset, column: motion.Column, T: int, salt: int) -> tuple[np.ndarray, np.ndarray]:
-    """(training, test) inputs of the first ``T`` frames, exact or observed with the column's error; the same
-    seeds for both engines, so both see the same noise on the same throws."""
-    ob = column.observation()
-    if ob is None:
-        return ds.train.x[:, :T], ds.test.x[:, :T]
-    return ob.observe(ds.train.x[:, :T], ds.fps, seed=salt + 50), ob.observe(ds.test.x[:, :T], ds.fps, seed=salt)
-
-
 def cross_cells(runners: dict[str, Any], cfgs: dict[str, TrainConfig], column: motion.Column,
                 seeds: tuple[int, ...], contact_height: float) -> list[Cross]:
     """Every learner of :data:`LEARNERS`, trained on each engine (``runners``: engine -> the runner on its data
     set) under ``column``'s condition and tested on every engine's test split the same way."""
     T = cfgs["lstm_positions"].n_frames(next(iter(runners.values())).fps)
-    salt = 300 + ["exact", "near", "calibrated", "far"].index(column.name)  # as the motion chapter's air-off columns
-    data = {e: _inputs(r.dataset, column, T, salt) for e, r in runners.items()}
+    data = {e: column.inputs(r.dataset, T) for e, r in runners.items()}  # the same noise in both engines
     y = {e: np.asarray(r.dataset.test.y) for e, r in runners.items()}
     out = []
     for train_engine, runner in runners.items():

@@ -46,6 +46,10 @@ NAMES = {"lstm_positions": "peephole LSTM, positions (the paper's)", "lstm_veloc
 """Each learner in words."""
 
 
+VIEWS = ("exact", "near", "calibrated", "far")
+"""The camera conditions of each air setting, in the table's order."""
+
+
 @dataclass(frozen=True)
 class Column:
     """One condition of the table: the air, and the camera's error (None: exact positions)."""
@@ -53,7 +57,7 @@ class Column:
     air: bool
     """Air drag and added mass on (the study's data) or off (the same throws without air)."""
     name: str
-    """'exact', 'near', 'calibrated' or 'far'."""
+    """One of :data:`VIEWS`."""
     noise: float | None
     """The camera and tracker's position error, metres; None for exact positions."""
     drop: float = 0.0
@@ -67,6 +71,16 @@ class Column:
 
     def observation(self) -> observe.Observation | None:
         return None if self.noise is None else observe.Observation(noise=self.noise, drop=self.drop)
+
+    def inputs(self, ds: Dataset, T: int) -> tuple[np.ndarray, np.ndarray]:
+        """(training, test) inputs of ``ds``'s first ``T`` frames, (n, T, 3) metres: exact, or observed with
+        the column's error. Each column draws its own noise, the same for every learner and every engine (the
+        seed depends on the column alone), the training split's apart from the test split's."""
+        ob = self.observation()
+        if ob is None:
+            return ds.train.x[:, :T], ds.test.x[:, :T]
+        salt = 100 * (2 if self.air else 3) + VIEWS.index(self.name)
+        return ob.observe(ds.train.x[:, :T], ds.fps, seed=salt + 50), ob.observe(ds.test.x[:, :T], ds.fps, seed=salt)
 
 
 def columns(calibration: dict[str, float]) -> list[Column]:
@@ -144,11 +158,7 @@ def column_cells(runner: Any, cfgs: dict[str, TrainConfig], column: Column, seed
     ds: Dataset = runner.dataset
     T = cfgs["lstm_positions"].n_frames(ds.fps)
     y = np.asarray(ds.test.y)
-    ob = column.observation()
-    # Each column draws its own observation of the test (and training) throws, the same for every learner.
-    salt = 100 * (2 if column.air else 3) + ["exact", "near", "calibrated", "far"].index(column.name)
-    x_test = ds.test.x[:, :T] if ob is None else ob.observe(ds.test.x[:, :T], ds.fps, seed=salt)
-    x_train = ds.train.x[:, :T] if ob is None else ob.observe(ds.train.x[:, :T], ds.fps, seed=salt + 50)
+    x_train, x_test = column.inputs(ds, T)
     out = []
     for name, cfg in network_configs(cfgs, column).items():
         rows = runner.train_runs(cfg, ("z",), seeds, desc=f"{column.key} {name}")
@@ -156,7 +166,8 @@ def column_cells(runner: Any, cfgs: dict[str, TrainConfig], column: Column, seed
         correct = np.stack([m.predict_proba(x_test).argmax(1) == y for m in models])
         out.append(Cell(name, column, correct, failed=sum(r["failed"] for r in rows),
                         val=float(np.mean([r["val_accuracy"] for r in rows]))))
-    labels = [runner.rocket("z", T, s, {"test": x_test}, train_x=None if ob is None else x_train)["test"] for s in seeds]
+    rocket_train = None if column.noise is None else x_train  # None: the cached fit on the exact split
+    labels = [runner.rocket("z", T, s, {"test": x_test}, train_x=rocket_train)["test"] for s in seeds]
     out.append(Cell("minirocket", column, np.stack([p == y for p in labels])))
     observed = dataclasses.replace(ds, train=Split(x_train, ds.train.y, ds.train.params))
     phys = baseline.fit(observed, "z", T / ds.fps)
