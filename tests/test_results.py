@@ -77,9 +77,25 @@ def test_a_claimed_order_against_the_interval_of_the_difference():
     assert results.order(d(0.04, 0.08), -1).verdict == "differs"
     assert results.order(d(-0.05, 0.01), -1).verdict == "inconclusive"
     assert results.order(d(0.01, 0.05), +1).inputs == {"rule": "order", "sign": 1, "lo": 0.01, "hi": 0.05,
-                                                        "delta": 0.03}
+                                                        "delta": 0.03, "in_points": True}
     with pytest.raises(ConfigError, match="sign"):
         results.order(d(0.01, 0.05), 2)
+
+
+def test_an_order_of_counts_or_seconds_takes_no_margin_in_points():
+    """A difference of bounces or seconds is judged on the side of 0 alone, at the book's δ and at any other."""
+    d = lambda lo, hi: Interval((lo + hi) / 2, lo, hi, "d")  # noqa: E731
+    tiny = results.order(d(0.001, 0.02), +1, in_points=False)  # 0.001 to 0.02 s: inside ±δ, yet above 0
+    assert tiny.verdict == "reproduced" and tiny.inputs["delta"] == 0.0 and tiny.inputs["in_points"] is False
+    near_zero = results.order(d(-0.01, 0.02), +1, in_points=False)
+    assert near_zero.verdict == "inconclusive"  # in points it would be "differs": wholly inside ±3 points
+    assert results.order(d(-0.01, 0.02), +1).verdict == "differs"
+    for k in (0.015, 0.06, 0.5):  # the summary's δ/2 and 2δ, and more, leave it alone
+        assert results.decide(near_zero.inputs, delta=k) == "inconclusive"
+        assert results.decide(tiny.inputs, delta=k) == "reproduced"
+    assert results.decide(results.order(d(-0.01, 0.02), +1).inputs, delta=0.005) == "inconclusive"
+    old = {"rule": "order", "sign": 1, "lo": -0.01, "hi": 0.02, "delta": 0.03}  # stored before the field existed
+    assert results.decide(old) == "differs" and results.decide(old, delta=0.005) == "inconclusive"
 
 
 def test_qualitative_and_not_comparable_rows_and_combining_verdicts():

@@ -146,7 +146,8 @@ def decide(inputs: dict[str, Any], delta: float | None = None) -> str:
         if rule == "number":
             return _verdict_number(inputs, float(inputs["delta"]) if delta is None else delta)
         if rule == "order":
-            return _verdict_order(inputs, float(inputs["delta"]) if delta is None else delta)
+            scaled = delta is not None and inputs.get("in_points", True)  # no margin for a count or a time
+            return _verdict_order(inputs, delta if scaled else float(inputs["delta"]))
         if rule in ("not comparable", "qualitative"):
             return rule
         parts = inputs["parts"]
@@ -213,15 +214,20 @@ def number(paper: float, interval: Interval, rule: Rule = RULE) -> Decision:
                       "delta": float(rule.delta), "n_paper": int(rule.n_paper)})
 
 
-def order(difference: Interval, sign: int, rule: Rule = RULE) -> Decision:
+def order(difference: Interval, sign: int, rule: Rule = RULE, *, in_points: bool = True) -> Decision:
     """A claim of the paper that A exceeds B (``sign`` +1) or falls below it (-1), against the interval of
     our difference A - B (a fraction): *reproduced* if it lies on the claimed side of 0; *differs* if it
     lies wholly on the other side, or wholly inside [-δ, δ] (no difference); else *inconclusive*. An
-    interval on the claimed side but inside [-δ, δ] is *reproduced*: the order holds, if by little."""
+    interval on the claimed side but inside [-δ, δ] is *reproduced*: the order holds, if by little.
+
+    ``in_points=False`` for a difference that is not an accuracy (a count of bounces, a time in seconds):
+    δ is a margin in accuracy points and means nothing there, so the order is judged on the side of 0
+    alone (stored with δ = 0 and ``in_points`` false; :func:`decide` keeps it so at any other δ)."""
     if sign not in (1, -1) or isinstance(sign, bool):
         raise ConfigError(f"order: sign = {sign!r}; use +1 (the paper says A beats B) or -1 (A falls below B)")
     lo, hi = _bounds(difference, "order(difference)")
-    return _decision({"rule": "order", "sign": int(sign), "lo": lo, "hi": hi, "delta": float(rule.delta)})
+    return _decision({"rule": "order", "sign": int(sign), "lo": lo, "hi": hi,
+                      "delta": float(rule.delta) if in_points else 0.0, "in_points": bool(in_points)})
 
 
 def not_comparable(reason: str) -> Decision:
