@@ -54,6 +54,9 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
         ("z", 0.3, 9), ("z", 0.5, 15), ("xyz", 0.3, 9), ("xyz", 0.5, 15)]
     n_trained = len(list((tmp_path / "models").iterdir()))
     assert r.plan.n_models == n_trained, "the plan counts every distinct model the runner was asked for"
+    again = runner(ds, one_cell, tmp_path)  # every model cached now: asked for the same, it counts the same
+    again.trained(cfg)
+    assert again.plan.n_models == 1, "a model loaded from the cache is in the plan as one trained afresh"
     long = r.long_memory(cfg)
     assert [(g["dims"], g["length"], g["truncation"]) for g in long] == [("z", 0.5, 15), ("xyz", 0.5, 15)], \
         "the long-memory variant back-propagates through every frame of the input"

@@ -114,9 +114,12 @@ class Runner:
         return self.rows(paper.seed_configs(cfg, seeds, dims, **changes), "dims", desc=desc)
 
     def trained(self, cfg: TrainConfig) -> train.TrainedModel:
-        """The kept model of ``cfg`` on this dataset, trained first if no run has left it."""
+        """The kept model of ``cfg`` on this dataset, trained first if no run has left it; in the plan either way,
+        so the book's count of models does not depend on what the cache held."""
         if not runs.model_dir(self.dataset, cfg, self.data_dir).is_dir():
             self.runs([cfg], test=False, desc="model")
+        else:
+            self.plan.add(self.dataset, cfg, self.data_dir, test=False)
         return runs.trained(self.dataset, cfg, self.data_dir)
 
     def models(self, cfg: TrainConfig, seeds: tuple[int, ...], **changes: Any) -> list[train.TrainedModel]:
