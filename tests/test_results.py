@@ -19,6 +19,9 @@ def test_wilson_interval_of_a_known_binomial_case():
     assert iv.value == 0.7 and iv.lo == pytest.approx(0.4810, abs=5e-4) and iv.hi == pytest.approx(0.8545, abs=5e-4)
     full = wilson(20, 20)
     assert full.hi == 1.0 and full.lo == pytest.approx(0.8389, abs=5e-4)
+    none = wilson(0, 1000)  # a build with no miss must hold its own 0 (comparing two builds relies on it)
+    assert none.lo == 0.0 and none.contains(0.0) and none.hi == pytest.approx(0.00383, abs=5e-5)
+    assert wilson(1000, 1000).hi == 1.0 and wilson(1000, 1000).contains(1.0)
     with pytest.raises(ConfigError, match="trials"):
         wilson(3, 0)
 

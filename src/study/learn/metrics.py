@@ -88,7 +88,9 @@ def wilson(k: int, n: int, level: float = LEVEL) -> Interval:
     p = k / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return Interval(p, max(0.0, centre - half), min(1.0, centre + half), f"Wilson interval, {k} of {n}")
+    lo = 0.0 if k == 0 else max(0.0, centre - half)  # exactly 0 (1) at no (every) success, not 2e-19 off it
+    hi = 1.0 if k == n else min(1.0, centre + half)
+    return Interval(p, lo, hi, f"Wilson interval, {k} of {n}")
 
 
 def bootstrap_accuracy(correct: np.ndarray, n_boot: int = BOOTSTRAP, seed: int = 0, level: float = LEVEL) -> Interval:
