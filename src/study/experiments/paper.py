@@ -1,4 +1,5 @@
-"""The configurations of the paper's experiments, as pure functions of a preset: which runs each one trains.
+"""The paper's own numbers, quoted in one place, and the configurations of its experiments, as pure functions of
+a preset: which runs each one trains.
 
 :class:`study.experiments.runner.Runner` trains them; keeping the configurations here, free of any training,
 lets a reader see every run of an experiment in a few lines:
@@ -17,12 +18,25 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from study.experiments.presets import Preset
+from study.experiments.runtable import Runs
 from study.learn.config import Cell, Dims, Inputs, TrainConfig
+
+TABLE1: dict[Dims, float] = {"xyz": 0.81, "z": 0.78}
+"""The paper's Table 1, its "best accuracy" with X, Y, Z and with Z alone: the paper's own numbers, quoted."""
+REAL_WORLD: dict[str, float] = {"light": 0.93, "heavy": 1.00}
+"""The paper's real-world test by class: a golf ball right in 93 % of its videos, a wooden cube in 100 %."""
+REAL_OBJECTS: dict[str, str] = {"light": "golf ball", "heavy": "wooden cube"}
+"""What the paper filmed for each class."""
+REAL_VIDEOS = 20
+"""Videos per object in the paper's real-world test."""
+DIMS_NAMES: dict[Dims, str] = {"xyz": "X, Y, Z", "z": "Z only"}
+"""Table 1's inputs in the paper's words."""
 
 BOTH: tuple[Dims, Dims] = ("z", "xyz")
 """Table 1's two inputs, in the order the experiments train them."""
@@ -38,28 +52,52 @@ def grid_configs(p: Preset, cell: Cell = "peephole", inputs: Inputs = "positions
             for s in p.grid_seeds]
 
 
-def grid_points(rows: list[dict]) -> list[dict]:
-    """The grid rows (one per run) grouped by point: mean and sample std of the validation accuracy over
-    the seeds, the mean validation loss, and how many of the seeds failed to train or diverged."""
+@dataclass(frozen=True)
+class GridPoint:
+    """One point of a grid, scored over its seeds on the validation split."""
+
+    config: TrainConfig
+    """The point (its first seed's config)."""
+    n: int
+    """Seeds trained at it."""
+    val_mean: float
+    """Mean validation accuracy over the seeds."""
+    val_std: float
+    """Their sample standard deviation (0 for one seed)."""
+    val_loss_mean: float
+    """Mean validation loss, nats (breaks ties)."""
+    failed: int
+    """Seeds that failed to train."""
+    diverged: int
+    """Seeds whose loss became non-finite."""
+    epochs_mean: float
+    """Mean epochs run."""
+
+    def same_point(self, cfg: TrainConfig) -> bool:
+        """Whether ``cfg`` is this point (the same :data:`GRID_FIELDS`)."""
+        return all(getattr(self.config, f) == getattr(cfg, f) for f in GRID_FIELDS)
+
+
+def grid_points(runs: Runs) -> list[GridPoint]:
+    """The grid runs (one per point and seed) grouped by point, in the order of the grid's fields: the mean and
+    sample std of the validation accuracy over the seeds, the mean validation loss, and how many of the seeds
+    failed to train or diverged."""
+    groups = runs.groups(*GRID_FIELDS)
     out = []
-    for key, group in itertools.groupby(sorted(rows, key=lambda r: tuple(r[f] for f in GRID_FIELDS)),
-                                        key=lambda r: tuple(r[f] for f in GRID_FIELDS)):
-        g = list(group)
-        acc = np.array([r["val_accuracy"] for r in g])
-        out.append({**dict(zip(GRID_FIELDS, key)), "n": len(g), "val_mean": float(acc.mean()),
-                    "val_std": float(acc.std(ddof=1)) if len(g) > 1 else 0.0,
-                    "val_loss_mean": float(np.mean([r["val_loss"] for r in g])),
-                    "failed": sum(r["failed"] for r in g),
-                    "diverged": sum(r["diverged_epoch"] is not None for r in g),
-                    "epochs_mean": float(np.mean([r["epochs"] for r in g]))})
+    for key in sorted(groups):
+        g = groups[key]
+        acc = g.val_accuracies()
+        out.append(GridPoint(g[0].config, len(g), float(acc.mean()), float(acc.std(ddof=1)) if len(g) > 1 else 0.0,
+                             float(np.mean(g.values("val_loss"))), g.n_failed,
+                             sum(d is not None for d in g.values("diverged_epoch")), float(np.mean(g.values("epochs")))))
     return out
 
 
-def best_config(rows: list[dict], p: Preset) -> TrainConfig:
+def best_config(runs: Runs, p: Preset) -> TrainConfig:
     """The grid point with the highest mean validation accuracy over its seeds (ties: lower mean
     validation loss, then grid order), as the config the later experiments start from."""
-    best = min(grid_points(rows), key=lambda r: (-r["val_mean"], r["val_loss_mean"]))
-    return dataclasses.replace(p.base_config(), **{f: best[f] for f in GRID_FIELDS})
+    best = min(grid_points(runs), key=lambda r: (-r.val_mean, r.val_loss_mean))
+    return dataclasses.replace(p.base_config(), **{f: getattr(best.config, f) for f in GRID_FIELDS})
 
 
 def differs_from_defaults(cfg: TrainConfig, p: Preset) -> dict[str, tuple[Any, Any]]:

@@ -28,12 +28,17 @@ import numpy as np
 from study.core import cache
 from study.experiments import paper, realworld, runs
 from study.experiments.presets import Preset, preset
+from study.experiments.runtable import Fitted, Run, Runs
 from study.experiments.stats import scored
 from study.learn import baseline, train
 from study.learn.config import Cell, Dims, Inputs, TrainConfig
 from study.learn.metrics import Interval
 from study.simulate import data, observe, synth
 from study.simulate.data import Dataset
+
+
+OBSERVED_SEEDS: dict[str, int] = {"test": 3, "train": 4}
+"""Seeds of the one observed draw of each split that chapters score learners on alike (:meth:`Runner.observed`)."""
 
 
 @dataclass(frozen=True)
@@ -103,15 +108,16 @@ class Runner:
         runs.run_many(jobs, self.data_dir, desc=desc, progress=self.progress, workers=self.workers or None,
                       scheduler=self.scheduler or None)
 
-    def rows(self, cfgs: list[TrainConfig], *fields: str, test: bool = True, desc: str = "runs") -> list[dict]:
-        """The tidy rows of ``cfgs`` (``runs.row``): the named config fields and each run's numbers."""
-        return [runs.row(r, self.dataset, *fields) for r in self.runs(cfgs, test, desc)]
+    def rows(self, cfgs: list[TrainConfig], test: bool = True, desc: str = "runs") -> Runs:
+        """The runs of ``cfgs`` on this runner's dataset as a table (:class:`~study.experiments.runtable.Runs`)."""
+        y = self.dataset.test.y
+        return Runs(Run.from_record(r, y) for r in self.runs(cfgs, test, desc))
 
     def train_runs(self, cfg: TrainConfig, dims: tuple[Dims, ...], seeds: tuple[int, ...], desc: str = "runs",
-                   **changes: Any) -> list[dict]:
-        """``cfg`` (with ``changes``) for each of ``dims`` and ``seeds``, scored on the test split: one row per
+                   **changes: Any) -> Runs:
+        """``cfg`` (with ``changes``) for each of ``dims`` and ``seeds``, scored on the test split: one run per
         (dims, seed)."""
-        return self.rows(paper.seed_configs(cfg, seeds, dims, **changes), "dims", desc=desc)
+        return self.rows(paper.seed_configs(cfg, seeds, dims, **changes), desc=desc)
 
     def trained(self, cfg: TrainConfig) -> train.TrainedModel:
         """The kept model of ``cfg`` on this dataset, trained first if no run has left it; in the plan either way,
@@ -129,10 +135,10 @@ class Runner:
     # -----------------------------------------------------------------------------------------
     # The paper's experiments
 
-    def grid(self, cell: Cell = "peephole", inputs: Inputs = "positions") -> list[dict]:
-        """The grid search on ``preset.ablation_dims`` for ``cell`` reading ``inputs``: one row per (point, seed),
+    def grid(self, cell: Cell = "peephole", inputs: Inputs = "positions") -> Runs:
+        """The grid search on ``preset.ablation_dims`` for ``cell`` reading ``inputs``: one run per (point, seed),
         validation only."""
-        return self.rows(paper.grid_configs(self.preset, cell, inputs), *paper.GRID_FIELDS, test=False,
+        return self.rows(paper.grid_configs(self.preset, cell, inputs), test=False,
                          desc=f"grid ({cell}{', velocity' if inputs == 'velocity' else ''})")
 
     def winner(self, cell: Cell = "peephole", inputs: Inputs = "positions") -> TrainConfig:
@@ -145,51 +151,48 @@ class Runner:
         reading velocity at the best point of its own grid (the same points, chosen by the same rule)."""
         return self.winner("peephole", inputs)
 
-    def seed_runs(self, cfg: TrainConfig) -> list[dict]:
-        """Table 1: ``cfg`` for Z and X, Y, Z, one row per (dims, seed), with test accuracy."""
-        return self.rows(paper.seed_configs(cfg, self.preset.seeds), "dims", desc="Table 1")
+    def seed_runs(self, cfg: TrainConfig) -> Runs:
+        """Table 1: ``cfg`` for Z and X, Y, Z, one run per (dims, seed), with test accuracy."""
+        return self.rows(paper.seed_configs(cfg, self.preset.seeds), desc="Table 1")
 
-    def protocol_runs(self, cfg: TrainConfig) -> list[dict]:
-        """Every protocol of ``paper.protocol_changes`` at ``cfg``, for Z and X, Y, Z, validation only: one row per
-        (protocol, dims, seed)."""
+    def protocol_runs(self, cfg: TrainConfig) -> Runs:
+        """Every protocol of ``paper.protocol_changes`` at ``cfg``, for Z and X, Y, Z, validation only: one run per
+        (protocol, dims, seed), labelled ``protocol``."""
         plan = paper.protocol_plan(cfg, self.preset)
-        rows = self.rows([c for _, c in plan], "dims", test=False, desc="protocols")
-        return [r | {"protocol": name} for (name, _), r in zip(plan, rows)]
+        rows = self.rows([c for _, c in plan], test=False, desc="protocols")
+        return rows.labelled({"protocol": name} for name, _ in plan)
 
-    def ablation(self, winners: dict[Cell, TrainConfig]) -> list[dict]:
-        """Each cell at its own grid winner on Z with the test seeds: one row per (cell, seed)."""
-        return self.rows(paper.ablation_configs(winners, self.preset), "cell", desc="ablation")
+    def ablation(self, winners: dict[Cell, TrainConfig]) -> Runs:
+        """Each cell at its own grid winner on Z with the test seeds: one run per (cell, seed)."""
+        return self.rows(paper.ablation_configs(winners, self.preset), desc="ablation")
 
-    def length_sweep(self, cfg: TrainConfig) -> list[dict]:
-        """Accuracy against input length: one row per (dims, length, seed) at ``cfg``."""
+    def length_sweep(self, cfg: TrainConfig) -> Runs:
+        """Accuracy against input length: one run per (dims, length, seed) at ``cfg``, labelled ``frames``."""
         cfgs = paper.length_configs(cfg, self.preset)
-        rows = self.rows(cfgs, "dims", "length", desc="lengths")
-        return [r | {"frames": c.n_frames(self.fps)} for r, c in zip(rows, cfgs)]
+        return self.rows(cfgs, desc="lengths").labelled({"frames": c.n_frames(self.fps)} for c in cfgs)
 
-    def long_memory(self, cfg: TrainConfig) -> list[dict]:
+    def long_memory(self, cfg: TrainConfig) -> Runs:
         """The length sweep at the preset's long lengths with a memory that spans the input (chrono
-        initialisation, full BPTT): one row per (dims, length, seed)."""
+        initialisation, full BPTT): one run per (dims, length, seed), labelled ``frames``."""
         cfgs = paper.long_memory_configs(cfg, self.preset, self.fps)
-        rows = self.rows(cfgs, "dims", "length", "truncation", desc="long memory")
-        return [r | {"frames": c.n_frames(self.fps)} for r, c in zip(rows, cfgs)]
+        return self.rows(cfgs, desc="long memory").labelled({"frames": c.n_frames(self.fps)} for c in cfgs)
 
-    def factorial(self, cfg: TrainConfig) -> list[dict]:
-        """Figure 4's explanation one factor at a time (``paper.factorial_configs``): one row per (truncation,
-        forget start, dims, seed) at the longest input."""
+    def factorial(self, cfg: TrainConfig) -> Runs:
+        """Figure 4's explanation one factor at a time (``paper.factorial_configs``): one run per (truncation,
+        forget start, dims, seed) at the longest input, labelled ``truncated`` and ``forget``."""
         plan = paper.factorial_configs(cfg, self.preset, self.fps)
-        rows = self.rows([c for _, _, c in plan], "dims", "length", desc="truncation x forget start")
-        return [r | {"truncated": trunc, "forget": forget} for (trunc, forget, _), r in zip(plan, rows)]
+        rows = self.rows([c for _, _, c in plan], desc="truncation x forget start")
+        return rows.labelled({"truncated": trunc, "forget": forget} for trunc, forget, _ in plan)
 
-    def baseline_runs(self) -> list[dict]:
-        """The physics baseline for Z and X, Y, Z at the preset's length: one row per dims (it has no seed)."""
-        out = []
+    def baseline_runs(self) -> dict[Dims, Fitted]:
+        """The physics baseline for Z and X, Y, Z at the preset's length, fitted once each (it has no seed)."""
+        out = {}
         for d in paper.BOTH:
             m = baseline.fit(self.dataset, d, self.preset.length)
             pred = m.predict_proba(self.dataset.test.x).argmax(axis=1)
             res = train.metrics(self.dataset.test.y, pred)
-            out.append({"dims": d, "accuracy": res["accuracy"], "correct": pred == np.asarray(self.dataset.test.y),
-                        **{f"accuracy_{c}": a for c, a in res["per_class_accuracy"].items()},
-                        "coefficients": m.coefficients})
+            out[d] = Fitted(d, res["accuracy"], pred == np.asarray(self.dataset.test.y), res["per_class_accuracy"],
+                            m.coefficients)
         return out
 
     # -----------------------------------------------------------------------------------------
@@ -227,6 +230,12 @@ class Runner:
         """The calibrated observation: the tracker's noise and share of lost frames."""
         cal = self.calibration()
         return observe.Observation(noise=cal["noise_m"], drop=cal["drop"])
+
+    def observed(self, split: str, ob: observe.Observation, n_frames: int) -> np.ndarray:
+        """The first ``n_frames`` of this dataset's ``split`` ('train' or 'test') as ``ob`` observes them: the one
+        seeded draw (:data:`OBSERVED_SEEDS`) every chapter that scores learners on observed positions shares."""
+        x = getattr(self.dataset, split).x
+        return ob.observe(x[:, :n_frames], self.fps, seed=OBSERVED_SEEDS[split])
 
     def randomised_config(self, cfg: TrainConfig, ob: observe.Observation | None = None) -> TrainConfig:
         """``cfg`` trained on random observations, its validation observed as the calibrated tracker (or ``ob``)

@@ -1,53 +1,91 @@
-"""Summaries of runs: a mean, a spread and a 95 % interval per group of rows, and the questions the chapters ask
+"""Summaries of runs: a mean, a spread and a 95 % interval per group of runs, and the questions the chapters ask
 of them.
 
-Rows are the tidy dicts of ``study.experiments.runs.row`` (one per run); a row scored on the test split carries
-``correct``, (n,) bool, which test trajectories it got right, so intervals can resample both the test
-trajectories and the seeds.
+Runs are a :class:`~study.experiments.runtable.Runs` table; a run scored on the test split carries ``correct``,
+(n,) bool, which test trajectories it got right, so intervals can resample both the test trajectories and the
+seeds.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from study.learn.metrics import Interval, bootstrap_accuracy
+from study.core.errors import ConfigError
+from study.experiments.runtable import Run, Runs
+from study.learn.metrics import Interval, bootstrap_accuracy, hierarchical_bootstrap
 
 
-def summarise(rows: list[dict], by: tuple[str, ...], value: str = "accuracy") -> list[dict]:
-    """Group ``rows`` by the ``by`` fields: n, mean, sample std (ddof=1; 0 for one run), min and best of
-    ``value``; the runs that failed to train, diverged, or stopped at the epoch cap; and, where rows carry
-    ``correct``, ``interval``: the 95 % bootstrap interval of the mean over test trajectories and seeds."""
-    groups: dict[tuple, list[dict]] = {}
-    for r in rows:
-        groups.setdefault(tuple(r[b] for b in by), []).append(r)
+@dataclass(frozen=True)
+class Summary:
+    """A group of runs: the spread of one of their values, and how many failed, diverged or hit the epoch cap."""
+
+    keys: Mapping[str, Any]
+    """The fields the group shares (``{"dims": "z"}``)."""
+    n: int
+    """Runs in the group."""
+    mean: float
+    """Mean of the value."""
+    std: float
+    """Sample standard deviation (ddof = 1; 0 for one run)."""
+    min: float
+    """Lowest value."""
+    max: float
+    """Highest value (of a test accuracy: the best *test* run, which no chapter reports as "the best")."""
+    failed: int
+    """Runs that failed to train (they count in the mean, at chance)."""
+    diverged: int
+    """Runs whose loss became non-finite."""
+    capped: int
+    """Runs stopped by the epoch cap."""
+    interval: Interval | None = field(default=None)
+    """With a test accuracy: the 95 % bootstrap interval of the mean over test trajectories and seeds."""
+
+
+def summarise(runs: Runs, by: tuple[str, ...] = (), value: str = "accuracy") -> list[Summary]:
+    """Group ``runs`` by the ``by`` fields and summarise ``value`` in each group (groups in order of first
+    appearance)."""
     out = []
-    for k, g in groups.items():
-        a = np.asarray([float(r[value]) for r in g])
-        s = {**dict(zip(by, k)), "n": len(a), "mean": float(a.mean()),
-             "std": float(a.std(ddof=1)) if len(a) > 1 else 0.0, "min": float(a.min()), "best": float(a.max()),
-             "failed": sum(bool(r.get("failed")) for r in g),
-             "diverged": sum(r.get("diverged_epoch") is not None for r in g),
-             "capped": sum(bool(r.get("capped")) for r in g)}
-        if value == "accuracy" and all("correct" in r for r in g):
-            s["interval"] = bootstrap_accuracy(np.stack([r["correct"] for r in g]))
-        out.append(s)
+    for k, g in runs.groups(*by).items():
+        a = np.asarray([float(v) for v in g.values(value)])
+        iv = bootstrap_accuracy(g.correct()) if value == "accuracy" and all(r.correct is not None for r in g) else None
+        out.append(Summary(dict(zip(by, k)), len(a), float(a.mean()), float(a.std(ddof=1)) if len(a) > 1 else 0.0,
+                           float(a.min()), float(a.max()), g.n_failed,
+                           sum(r.diverged_epoch is not None for r in g), sum(r.capped for r in g), iv))
     return out
 
 
-def mean_interval(rows: list[dict], **where: Any) -> Interval:
-    """The interval of :func:`summarise` for the rows whose fields equal ``where`` (all rows if none)."""
-    picked = [r for r in rows if all(r[k] == v for k, v in where.items())]
-    return summarise(picked, ())[0]["interval"]
+def summary(runs: Runs, value: str = "accuracy") -> Summary:
+    """:func:`summarise` of all ``runs`` as one group."""
+    if not runs:
+        raise ConfigError("stats.summary: no runs to summarise")
+    return summarise(runs, (), value)[0]
 
 
-def best_run_interval(rows: list[dict]) -> tuple[dict, Interval]:
-    """The row with the highest test accuracy and the bootstrap interval of that one run (the paper's
-    number is a best run: compare it with ours)."""
-    best = max(rows, key=lambda r: r["accuracy"])
-    return best, bootstrap_accuracy(best["correct"])
+@dataclass(frozen=True)
+class ValidationPick:
+    """The paper's "best accuracy", computed fairly: on each data set, the run its validation split picks, scored
+    on the test split it never saw; their mean over the data sets with a hierarchical 95 % interval."""
+
+    picked: tuple[Run, ...]
+    """The run each data set's validation picks, in data-set order."""
+    interval: Interval
+    """Their mean test accuracy with the hierarchical bootstrap over data sets and test throws (over one data set,
+    the plain bootstrap of that one run)."""
+
+
+def validation_pick(per_data: Sequence[Runs]) -> ValidationPick:
+    """The run validation picks on each data set (``per_data[d]``: the seeds of one configuration trained on data
+    set d) and the interval of their mean: the one statistic behind every "the run validation picks"."""
+    if not per_data or any(not g for g in per_data):
+        raise ConfigError("validation_pick: give the runs of one or more data sets, each with one run or more")
+    picked = tuple(g.picked_by_validation() for g in per_data)
+    correct = [r.correct[None] for r in picked]  # type: ignore[index]
+    iv = bootstrap_accuracy(correct[0]) if len(correct) == 1 else hierarchical_bootstrap(correct)
+    return ValidationPick(picked, iv)
 
 
 def scored(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> Interval:
@@ -57,19 +95,39 @@ def scored(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> Interval:
     return bootstrap_accuracy(correct)
 
 
-def long_input_effect(summary: list[dict], dims: str) -> dict[str, Any]:
-    """Does accuracy fall at the longest inputs? From :func:`summarise` rows grouped by (dims, length).
+@dataclass(frozen=True)
+class LongInputEffect:
+    """Whether accuracy falls at the longest inputs (the paper's Figure 4)."""
+
+    dims: str
+    """The input."""
+    best_length: float
+    """The length with the highest mean accuracy, seconds."""
+    best_mean: float
+    """Its mean accuracy."""
+    last_length: float
+    """The longest length, seconds."""
+    last_mean: float
+    """Its mean accuracy."""
+    drop: float
+    """Best mean minus the longest's."""
+    hurts: bool
+    """The longest is below the best and their 95 % intervals do not overlap."""
+
+
+def long_input_effect(summary: Sequence[Summary], dims: str) -> LongInputEffect:
+    """Does accuracy fall at the longest inputs? From :func:`summarise` groups by (dims, length).
 
     Compares the best mean accuracy over lengths with the mean at the longest length; ``hurts`` when
     their 95 % intervals do not overlap and the longest is below.
     """
-    rows = sorted((r for r in summary if r["dims"] == dims), key=lambda r: r["length"])
-    best = max(rows, key=lambda r: r["mean"])
+    rows = sorted((r for r in summary if r.keys["dims"] == dims), key=lambda r: r.keys["length"])
+    best = max(rows, key=lambda r: r.mean)
     last = rows[-1]
-    drop = best["mean"] - last["mean"]
-    hurts = best is not last and drop > 0 and not best["interval"].overlaps(last["interval"])
-    return {"dims": dims, "best_length": best["length"], "best_mean": best["mean"], "last_length": last["length"],
-            "last_mean": last["mean"], "drop": drop, "hurts": bool(hurts)}
+    drop = best.mean - last.mean
+    assert best.interval is not None and last.interval is not None
+    hurts = best is not last and drop > 0 and not best.interval.overlaps(last.interval)
+    return LongInputEffect(dims, best.keys["length"], best.mean, last.keys["length"], last.mean, drop, bool(hurts))
 
 
 def intervals_agree(intervals: Sequence[Interval]) -> bool:

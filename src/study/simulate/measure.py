@@ -140,6 +140,15 @@ def best_threshold_rule(f_train: np.ndarray, y_train: np.ndarray, f_test: np.nda
             "correct": correct}
 
 
+def best_rule(rules: list[dict]) -> dict:
+    """Of several :func:`best_threshold_rule` results (one per feature, :func:`simple_rules`), the one with the
+    highest *training* accuracy (ties: the first): the one place the book chooses its best one-feature rule,
+    never by its test accuracy."""
+    if not rules:
+        raise ValueError("best_rule: no rules to choose from")
+    return max(rules, key=lambda r: r["train_accuracy"])
+
+
 FEATURES = {
     "bounces": "number of bounces (rises of 2 cm or more after a fall)",
     "time_to_rest": "time until the object stops, s",

@@ -32,6 +32,13 @@ Z = 2
 """Column of the height in a trajectory."""
 
 
+def height_only(x: np.ndarray) -> np.ndarray:
+    """What one camera's height leaves of trajectories ``x`` (..., 3) metres: X and Y set to 0, Z kept (for a
+    classifier that reads all three channels)."""
+    x = np.asarray(x)
+    return np.concatenate([np.zeros_like(x[..., :2]), x[..., 2:]], axis=-1)
+
+
 def _check(x: np.ndarray, what: str = "trajectories") -> np.ndarray:
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 3 or x.shape[2] != 3:

@@ -1,0 +1,569 @@
+"""The chapter *Table 1*: the paper's network on Z alone and on X, Y, Z, and everything a single best number hides.
+
+:func:`compute` runs the chapter's experiments on a runner (every run cached) and returns :class:`Table1`:
+
+1. the grid search on Z for each cell of the ablation, and for the paper's network fed its velocity, every point
+   scored by its mean validation accuracy over seeds (:class:`GridSearch`);
+2. what each change to the training protocol did, on validation data (:class:`Protocols`);
+3. Table 1 itself: for the paper's network reading positions and reading velocity, X, Y, Z and Z, the run
+   validation picks on each of the preset's data sets (the paper's statistic, computed fairly), the mean of the
+   first data set's seeds, the mean over data sets and seeds, and the share of variance between data sets;
+   the verdicts against the paper's 81 % and 78 % and its claim that X, Y, Z does better;
+4. the ablation of the peepholes (each cell at its own grid winner);
+5. a physics baseline without learning.
+
+:class:`Numbers` is what the chapter reports, under the names ``table1.xyz.paper_way`` and so on; the page
+glues the rest of :class:`Table1` (its sentences and tables) with ``study.book.publish``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from study.experiments import paper, stats, verdicts
+from study.experiments.reported import Number, Reported, Verdict, count, named, number
+from study.experiments.runner import Runner
+from study.experiments.runtable import Fitted, Runs
+from study.experiments.text import Table, pct, pct_ci, pct_pm, points, runs_note, seeds_ci
+from study.learn.config import Cell, Dims, Inputs, TrainConfig
+from study.learn.metrics import (PLATEAU_LOSS, Interval, between_share, bootstrap_accuracy, bootstrap_difference,
+                                 hierarchical_bootstrap, t_interval)
+
+CELL_NAMES: dict[Cell, str] = {"peephole": "peephole LSTM (paper)", "no-peephole": "LSTM, peepholes fixed at 0",
+                               "lstm": "LSTM (torch.nn.LSTM)", "gru": "GRU"}
+"""Each cell in words."""
+INPUT_NAMES: dict[Inputs, str] = {"positions": "positions (the paper's)", "velocity": "with velocity (beyond the paper)"}
+"""What the network reads, in words."""
+ProtocolKey = Literal["first", "forget_bias", "min_epochs", "clipping", "plateau"]
+PROTOCOL_KEYS: tuple[ProtocolKey, ...] = ("first", "forget_bias", "min_epochs", "clipping", "plateau")
+"""The results file's name of each protocol of ``paper.PROTOCOLS``, in order."""
+ORDER: tuple[Dims, ...] = ("xyz", "z")
+"""Table 1's rows, in the paper's order."""
+
+
+# ---------------------------------------------------------------------------------------------
+# What the chapter reports
+
+
+@dataclass(frozen=True)
+class Row(Reported):
+    """One row of Table 1: one input (X, Y, Z or Z) of one network (positions or velocity)."""
+
+    paper_way: Number
+    """The run validation picks on each data set, mean over data sets (hierarchical bootstrap); with the paper's
+    number and its verdict on the positions row."""
+    mean: Number
+    """Mean test accuracy of the first data set's seeds (bootstrap over test throws and seeds)."""
+    mean_t: Number
+    """The same mean with a t-interval over its seeds."""
+    across_data: Number
+    """Mean over every data set and the grid's seeds (hierarchical bootstrap)."""
+    between_share: Number
+    """Share of a run's variance that lies between data sets."""
+    std: Number
+    """Sample standard deviation of the first data set's seeds."""
+    failed: Number
+    """Runs that failed to train, every data set."""
+
+
+@dataclass(frozen=True)
+class Velocity(Reported):
+    """Table 1 for the paper's network fed its velocity (beyond the paper)."""
+
+    rows: dict[Dims, Row] = named("")
+    xyz_minus_z: Number = named("xyz_minus_z")
+    """X, Y, Z minus Z, mean over seeds (paired bootstrap)."""
+
+
+@dataclass(frozen=True)
+class ProtocolRow(Reported):
+    """One training protocol on one input, on validation data."""
+
+    val_mean: Number
+    """Mean validation accuracy over the protocol seeds."""
+    stalled: Number
+    """Seeds that stalled (failed to train)."""
+
+
+@dataclass(frozen=True)
+class AblationCell(Reported):
+    """One cell of the ablation, on Z, with Table 1's seeds."""
+
+    mean: Number
+    """Mean test accuracy."""
+
+
+@dataclass(frozen=True)
+class Ablation(Reported):
+    """Do the peepholes matter?"""
+
+    cells: dict[Cell, AblationCell] = named("")
+    minus: dict[Cell, Number] = named("peephole_minus_{key}")
+    """The peephole LSTM minus each other cell (paired bootstrap)."""
+
+
+@dataclass(frozen=True)
+class GridNumbers(Reported):
+    """The grid search."""
+
+    failed_runs: Number
+    """Grid runs that failed to train, every cell."""
+
+
+@dataclass(frozen=True)
+class Numbers(Reported):
+    """Every number the chapter *Table 1* reports."""
+
+    CHAPTER = "table1"
+    grid: GridNumbers
+    protocol: dict[ProtocolKey, dict[Dims, ProtocolRow]]
+    rows: dict[Dims, Row] = named("")
+    velocity: Velocity = named("velocity")
+    verdict: Verdict = named("verdict")
+    """Table 1 over both inputs: the paper's best against the run validation picks."""
+    xyz_minus_z: Number = named("xyz_minus_z")
+    """X, Y, Z minus Z (positions), mean over seeds, with the verdict on the paper's claim that X, Y, Z is better."""
+    ablation: Ablation = named("ablation")
+    baseline: dict[Dims, Number] = named("baseline")
+    """The physics baseline's test accuracy."""
+    lstm_minus_baseline: dict[Dims, Number] = named("lstm_minus_baseline")
+    """The paper's network (mean of seeds) minus the physics baseline."""
+
+
+# ---------------------------------------------------------------------------------------------
+# The experiments, one at a time
+
+
+@dataclass(frozen=True)
+class GridSearch:
+    """The grid search on Z: every cell's grid and the velocity network's, and the points they chose."""
+
+    grids: dict[Cell, Runs]
+    """Each ablation cell's grid runs (positions)."""
+    velocity: Runs
+    """The paper's network fed velocity, the same points."""
+    winners: dict[Cell, TrainConfig]
+    """Each cell's best point."""
+    config: TrainConfig
+    """Table 1's configuration: the paper's network at its best point."""
+    velocity_config: TrainConfig
+    """The velocity network at the best point of its own grid."""
+
+
+def grid_search(runner: Runner) -> GridSearch:
+    """Every grid of the chapter at once (so both cores stay busy), then each winner."""
+    p = runner.preset
+    runner.prefetch([(runner, paper.grid_configs(p, cell), False) for cell in p.cells]
+                    + [(runner, paper.grid_configs(p, "peephole", "velocity"), False)], desc="grids")
+    grids = {cell: runner.grid(cell) for cell in p.cells}
+    winners = {cell: paper.best_config(rows, p) for cell, rows in grids.items()}
+    return GridSearch(grids, runner.grid("peephole", "velocity"), winners, runner.table1_config(),
+                      runner.table1_config("velocity"))
+
+
+def prefetch(runner: Runner, g: GridSearch) -> None:
+    """Every other run of the chapter at once: the protocols, Table 1 on every data set, the ablation."""
+    p = runner.preset
+    runner.prefetch([(runner, [c for _, c in paper.protocol_plan(g.config, p)], False),
+                     (runner, paper.seed_configs(g.config, p.seeds) + paper.seed_configs(g.velocity_config, p.seeds),
+                      True),
+                     (runner, paper.ablation_configs(g.winners, p), True)]
+                    + [(o, paper.seed_configs(g.config, p.grid_seeds) + paper.seed_configs(g.velocity_config, p.grid_seeds),
+                        True) for o in (runner.with_data_seed(s) for s in p.data_seeds[1:])],
+                    desc="Table 1, protocols, ablation")
+
+
+@dataclass(frozen=True)
+class Seeds:
+    """Table 1's runs for one network: the first data set's seeds, and the grid's seeds on each other data set."""
+
+    first: Runs
+    """Data set 1, Table 1's seeds, both inputs."""
+    others: tuple[Runs, ...]
+    """Each other data set, the grid's seeds, both inputs."""
+
+    def per_data(self, dims: Dims) -> list[Runs]:
+        """The runs of ``dims`` on each data set, the first first."""
+        return [self.first.where(dims=dims)] + [o.where(dims=dims) for o in self.others]
+
+
+def seed_runs(runner: Runner, cfg: TrainConfig) -> Seeds:
+    """Table 1's runs of ``cfg`` on the first data set (Table 1's seeds) and the others (the grid's seeds)."""
+    p = runner.preset
+    others = [runner.with_data_seed(s) for s in p.data_seeds[1:]]  # other throws, same priors
+    return Seeds(runner.seed_runs(cfg), tuple(o.train_runs(cfg, paper.BOTH, p.grid_seeds, desc=f"data set {i + 2}")
+                                              for i, o in enumerate(others)))
+
+
+# ---------------------------------------------------------------------------------------------
+# The chapter's result
+
+
+@dataclass(frozen=True)
+class Table1:
+    """Everything the chapter shows: its numbers (:attr:`numbers`), its tables and sentences, its figure's data."""
+
+    numbers: Numbers
+    """What the chapter reports (the results file's ``table1.*``)."""
+    config: TrainConfig
+    """Table 1's configuration: the paper's network at its grid's best point."""
+    velocity_config: TrainConfig
+    """The network fed velocity at its own grid's best point."""
+    seeds: dict[Inputs, Seeds]
+    """Table 1's runs for each network (the figure draws every one)."""
+    picked: dict[tuple[Inputs, Dims], tuple[int, ...]]
+    """The seed validation picks on each data set, per row."""
+    grid_table: Table
+    """Every grid point of every cell, scored over seeds."""
+    protocol_table: Table
+    """What each change to the training protocol did."""
+    table1: Table
+    """Table 1 beside the paper's."""
+    spread_table: Table
+    """Every seed, their t-interval, the mean over data sets, the variance between them."""
+    ablation_table: Table
+    """The ablation."""
+    baseline_table: Table
+    """The physics baseline against the network."""
+    n_params: int
+    """Weights of the network with X, Y, Z."""
+    length_s: float
+    """Input length, seconds."""
+    length_frames: int
+    """Input length, frames."""
+    n_train: int
+    """Training trajectories."""
+    n_test: int
+    """Test trajectories."""
+    min_epochs: int
+    patience: int
+    max_epochs: int
+    n_grid_seeds: int
+    n_seeds: int
+    """Table 1's seeds on the first data set."""
+    n_data: int
+    """Data sets Table 1 is trained on."""
+    first_patience: int
+    first_max_epochs: int
+    grid_runs: int
+    """Runs of every grid."""
+    n_protocol_runs: int
+    """Runs of the first protocol (both inputs)."""
+    stalls_first: int
+    """Runs that stalled with the first protocol."""
+    stalls_study: int
+    """Runs that stalled with the study's protocol."""
+    lstm_lrs: str
+    gru_lrs: str
+    clip_gain: str
+    """What clipping changed, in points, per input."""
+    last_gain: str
+    """What halving the learning rate on plateaus changed on top."""
+    last_kept: bool
+    """Whether that last change helped both inputs by more than half a point."""
+    clip_helps: bool
+    """Whether clipping helped both inputs by more than half a point."""
+    defaults_moved: dict[str, tuple[float, float]]
+    """Grid fields in which Table 1's config differs from TrainConfig's defaults: (default, chosen)."""
+    abl_diffs: dict[Cell, Interval]
+    """The peephole LSTM minus each other cell."""
+    base_beats: dict[Dims, Interval]
+    """The network minus the physics baseline."""
+    vel_xyz_accuracies: tuple[float, ...]
+    """The velocity network's seeds on X, Y, Z (data set 1)."""
+    vel_failed_xyz: int
+    """Of those, runs that failed to train."""
+    shares: tuple[str, ...]
+    """Each row's variance between data sets, as shown."""
+
+    # Sentences whose words depend on the numbers -------------------------------------------------
+
+    @property
+    def plateau_loss(self) -> str:
+        return f"{PLATEAU_LOSS:.3f}"
+
+    @property
+    def best_lr(self) -> float:
+        return self.config.lr
+
+    @property
+    def best_trunc(self) -> int:
+        return self.config.truncation
+
+    @property
+    def grid_failed(self) -> int:
+        return int(self.numbers.grid.failed_runs.value)
+
+    @property
+    def vel_point(self) -> str:
+        return f"learning rate {self.velocity_config.lr:g}, truncation after {self.velocity_config.truncation} frames"
+
+    @property
+    def vel_same(self) -> str:
+        same = (self.velocity_config.lr, self.velocity_config.truncation) == (self.config.lr, self.config.truncation)
+        return "the same point as Table 1's" if same else "not Table 1's point: validation preferred another"
+
+    @property
+    def defaults_note(self) -> str:
+        if not self.defaults_moved:
+            return ("This is the study's protocol, `TrainConfig`'s defaults, so `study train` with its defaults "
+                    "trains Table 1's configuration.")
+        return ("It differs from `TrainConfig`'s defaults (the study's protocol, what `study train` uses unless told "
+                "otherwise) in " + ", ".join(f"{f} ({a} there, {b} here)" for f, (a, b) in self.defaults_moved.items())
+                + ".")
+
+    @property
+    def clip_why(self) -> str:
+        if self.clip_helps:
+            return ("The paper names exploding gradients among the network's troubles: a gradient spike that Adam's "
+                    "second-moment estimate remembers for hundreds of steps slows every later step, and clipping "
+                    "prevents the spike.")
+        return ("At this point of the grid clipping does not help both inputs by more than half a point; the study "
+                "keeps it because it costs nothing and guards against the exploding gradients the paper names.")
+
+    @property
+    def last_verdict(self) -> str:
+        return ("so the study does not keep it" if not self.last_kept else
+                "an improvement on validation data that the study's protocol does not include yet")
+
+    @property
+    def overall(self) -> str:
+        return self.numbers.verdict.verdict
+
+    @property
+    def claim_text(self) -> str:
+        return {
+            "reproduced": "as in the paper, X, Y, Z does better than Z alone: the interval of the difference lies "
+                          "above 0",
+            "differs": "unlike the paper, X, Y, Z does not do better than Z alone: the interval of the difference "
+                       "lies below 0, or within the margin of no difference",
+            "inconclusive": "the data cannot say whether X, Y, Z does better than Z alone: the interval of the "
+                            "difference straddles 0 (or the margin of no difference)",
+        }[self.numbers.xyz_minus_z.verdict or "inconclusive"]
+
+    @property
+    def delta_pts(self) -> str:
+        return f"{100 * verdicts.MARGIN.delta:g}"
+
+    @property
+    def margin_xyz(self) -> str:
+        return f"{100 * verdicts.margin(paper.TABLE1['xyz']):.1f}"
+
+    @property
+    def vel_order(self) -> str:
+        d = self.numbers.velocity.xyz_minus_z
+        return "trails" if d.hi < 0 else "beats" if d.lo > 0 else "cannot be told apart from"
+
+    @property
+    def vel_xyz_range(self) -> str:
+        a = [100 * x for x in self.vel_xyz_accuracies]
+        return f"{min(a):.1f} and {max(a):.1f} %"
+
+    @property
+    def vel_runs_note(self) -> str:
+        if self.vel_failed_xyz == 0:
+            return ("none of them failed to train, so the gap is not runs stuck at chance but a solution the layer "
+                    "settles on when it also reads the horizontal channels")
+        return f"{self.vel_failed_xyz} of them failed to train (counted in the mean, not removed)"
+
+    @property
+    def share_range(self) -> str:
+        lo, hi = min(self.shares), max(self.shares)
+        return f"{lo} to {hi}" if lo != hi else self.shares[0]
+
+    @property
+    def abl_verdict(self) -> str:
+        def says(c: Cell, dv: Interval) -> str:
+            if dv.lo > 0:
+                return f"ahead of the {CELL_NAMES[c]} by {100 * dv.value:.1f} points"
+            if dv.hi < 0:
+                return f"behind the {CELL_NAMES[c]} by {100 * -dv.value:.1f} points"
+            return f"not distinguishable from the {CELL_NAMES[c]} ({100 * dv.value:+.1f} points, interval across 0)"
+
+        return "; ".join(says(c, dv) for c, dv in self.abl_diffs.items())
+
+    @property
+    def base_verdict(self) -> str:
+        ahead = [paper.DIMS_NAMES[d] for d, b in self.base_beats.items() if b.lo > 0]
+        behind = [paper.DIMS_NAMES[d] for d, b in self.base_beats.items() if b.hi < 0]
+        if len(ahead) == 2:
+            return "the LSTM beats physics with both inputs"
+        if len(behind) == 2:
+            return "physics beats the LSTM with both inputs"
+        return (f"the LSTM is ahead with {', '.join(ahead) or 'neither input'} and behind with "
+                f"{', '.join(behind) or 'neither'}; elsewhere the two cannot be told apart")
+
+
+# ---------------------------------------------------------------------------------------------
+# Each part of the result
+
+
+def _grid_table(g: GridSearch, p: object) -> tuple[Table, int, int]:
+    chosen = {(c, "positions"): w for c, w in g.winners.items()} | {("peephole", "velocity"): g.velocity_config}
+    labelled = [(cell, "positions", g.grids[cell]) for cell in g.grids] + [("peephole", "velocity", g.velocity)]
+    rows = [{"cell": CELL_NAMES[cell] + (", with velocity" if inputs == "velocity" else ""),
+             "lr": pt.config.lr, "truncation": pt.config.truncation,
+             "val": pct_pm(pt.val_mean, pt.val_std), "runs": f"{pt.n - pt.failed} of {pt.n}",
+             "epochs_mean": pt.epochs_mean, "winner": "✓" if pt.same_point(chosen[cell, inputs]) else ""}
+            for cell, inputs, runs in labelled for pt in paper.grid_points(runs)]
+    table = Table(rows, {"cell": "cell", "lr": "learning rate", "truncation": "truncation (frames)",
+                         "val": "validation accuracy, mean ± std", "runs": "seeds that trained",
+                         "epochs_mean": "epochs (mean)", "winner": "chosen"}, {"lr": "g", "epochs_mean": ".0f"})
+    return table, sum(r.n_failed for _, _, r in labelled), sum(len(r) for _, _, r in labelled)
+
+
+def _protocols(protocols: Runs) -> tuple[dict[ProtocolKey, dict[Dims, ProtocolRow]], Table, dict[str, object]]:
+    val = {(s.keys["protocol"], s.keys["dims"]): s for s in stats.summarise(protocols, ("protocol", "dims"), "val_accuracy")}
+    epochs = {(s.keys["protocol"], s.keys["dims"]): s.mean for s in stats.summarise(protocols, ("protocol", "dims"), "epochs")}
+    names = list(paper.PROTOCOLS)
+    both: tuple[Dims, Dims] = ("xyz", "z")
+    rows = [{"protocol": name, **{
+        d: f"{pct_pm(val[name, d].mean, val[name, d].std)}; {val[name, d].failed} of {val[name, d].n} stalled; "
+           f"{epochs[name, d]:.0f} epochs" for d in both}} for name in names]
+    table = Table(rows, {"protocol": "protocol (each row adds one change)",
+                         "xyz": "X, Y, Z: validation accuracy; stalls; epochs", "z": "Z only: the same"})
+    numbers = {key: {d: ProtocolRow(number(val[names[i], d].mean, f"validation accuracy, {names[i]}, {paper.DIMS_NAMES[d]}"),
+                                    count(val[names[i], d].failed, f"stalled seeds, {names[i]}"))
+                     for d in both} for i, key in enumerate(PROTOCOL_KEYS)}
+    study = names[paper.STUDY_PROTOCOL]
+    step = {d: val[study, d].mean - val[names[paper.STUDY_PROTOCOL - 1], d].mean for d in both}
+    last = {d: val[names[-1], d].mean - val[study, d].mean for d in both}
+    facts = {
+        "stalls_first": sum(val[names[0], d].failed for d in both),
+        "stalls_study": sum(val[study, d].failed for d in both),
+        "n_protocol_runs": sum(val[names[0], d].n for d in both),
+        "clip_gain": " and ".join(f"{100 * step[d]:+.1f} points ({paper.DIMS_NAMES[d]})" for d in both),
+        "last_gain": " and ".join(f"{100 * last[d]:+.1f} points ({paper.DIMS_NAMES[d]})" for d in both),
+        "last_kept": min(last.values()) > 0.005, "clip_helps": min(step.values()) > 0.005,
+    }
+    return numbers, table, facts
+
+
+def _row(runner: Runner, inputs: Inputs, cfg: TrainConfig, s: Seeds, d: Dims) -> tuple[Row, dict, dict, tuple[int, ...]]:
+    p, ds = runner.preset, runner.dataset
+    first = s.first.where(dims=d)
+    per_data = s.per_data(d)
+    pick = stats.validation_pick(per_data)
+    summ = stats.summary(first)
+    t = t_interval(first.accuracies())
+    balanced = [np.stack([r.correct for r in g if r.seed in p.grid_seeds]) for g in per_data]
+    across = hierarchical_bootstrap(balanced)
+    share = between_share(balanced)
+    src = dict(config=dataclasses.asdict(cfg), data_seeds=list(p.data_seeds), data_key=ds.key)
+    where = f"{paper.DIMS_NAMES[d]}, {INPUT_NAMES[inputs]}"
+    paper_way = number(pick.interval, f"the run validation picks, mean over {len(pick.picked)} data sets, {where}",
+                       paper=paper.TABLE1[d] if inputs == "positions" else None,
+                       seeds=[r.seed for r in pick.picked], **src)
+    row = Row(
+        paper_way,
+        number(summ.interval, f"mean test accuracy over {summ.n} seeds, {where}", seeds=list(p.seeds),
+               per_seed=[r.accuracy for r in first], **src),
+        number(t, f"the same mean, t-interval over its {summ.n} seeds"),
+        number(across, f"mean over {len(per_data)} data sets x {len(p.grid_seeds)} seeds, {where}", **src),
+        number(share["share"], f"share of a run's variance between data sets ({share['method']})"),
+        number(summ.std, "sample standard deviation over seeds"),
+        count(summ.failed + sum(g.n_failed for g in per_data[1:]), "runs that failed to train, every data set"),
+    )
+    table = {"inputs": INPUT_NAMES[inputs], "dims": paper.DIMS_NAMES[d],
+             "paper": pct(paper.TABLE1[d], 0) if inputs == "positions" else "—",
+             "paper_way": pct_ci(pick.interval),
+             "picked": ", ".join(f"{100 * r.accuracy:.1f}" for r in pick.picked),  # type: ignore[operator]
+             "mean": pct_ci(summ.interval),
+             "verdict": f"**{paper_way.verdict}**" if paper_way.verdict else "(beyond the paper)"}
+    spread = {"inputs": INPUT_NAMES[inputs], "dims": paper.DIMS_NAMES[d],
+              "seeds": ", ".join(f"{100 * r.accuracy:.1f}" for r in first),  # type: ignore[operator]
+              "t": pct_ci(t), "across": pct_ci(across), "share": f"{100 * share['share']:.0f} %",
+              "runs": runs_note(summ) or "all trained"}
+    return row, table, spread, tuple(r.seed for r in pick.picked)
+
+
+def _ablation(runner: Runner, winners: dict[Cell, TrainConfig]) -> tuple[Ablation, Table, dict[Cell, Interval]]:
+    abl = runner.ablation(winners)
+    cells = runner.preset.cells
+    correct = {c: abl.where(cell=c).correct() for c in cells}
+    summ = {c: stats.summary(abl.where(cell=c)) for c in cells}
+    rows = [{"cell": CELL_NAMES[c], "point": f"lr {winners[c].lr:g}, truncation {winners[c].truncation}",
+             "mean": seeds_ci(correct[c]), "std": f"{100 * summ[c].std:.1f}",
+             "runs": runs_note(summ[c]) or "all trained"} for c in cells]
+    table = Table(rows, {"cell": "cell (Z only)", "point": "its grid point",
+                         "mean": "test accuracy, mean [95 % CI]; t-interval over seeds; each seed (%)",
+                         "std": "seed std (points)", "runs": "runs"})
+    diffs = {c: bootstrap_difference(correct["peephole"], correct[c]) for c in cells if c != "peephole"}
+    numbers = Ablation(
+        {c: AblationCell(number(summ[c].interval, f"mean test accuracy, {CELL_NAMES[c]}, Z",
+                                config=dataclasses.asdict(winners[c]))) for c in cells},
+        {c: number(dv, f"peephole LSTM minus {CELL_NAMES[c]}", signed=True) for c, dv in diffs.items()})
+    return numbers, table, diffs
+
+
+def _baseline(base: dict[Dims, Fitted], positions: Runs) -> tuple[dict[Dims, Number], dict[Dims, Number], Table,
+                                                                  dict[Dims, Interval]]:
+    accs, minus, rows, beats = {}, {}, [], {}
+    for d in ("xyz", "z"):
+        b_iv = bootstrap_accuracy(base[d].correct)
+        accs[d] = number(b_iv, f"physics baseline's test accuracy, {paper.DIMS_NAMES[d]}")
+        lstm = positions.where(dims=d)
+        beats[d] = bootstrap_difference(lstm.correct(), base[d].correct)
+        minus[d] = number(beats[d], f"peephole LSTM (mean) minus the baseline, {paper.DIMS_NAMES[d]}", signed=True)
+        rows.append({"dims": paper.DIMS_NAMES[d], "physics": pct_ci(b_iv), "lstm": pct_ci(stats.summary(lstm).interval),
+                     "diff": points(beats[d]).replace(" points", ""),
+                     "coef": ", ".join(f"{k} {v:+.2f}" for k, v in base[d].coefficients.items())})
+    table = Table(rows, {"dims": "trajectory dimension(s)", "physics": "physics baseline [95 % CI]",
+                         "lstm": "peephole LSTM, mean [95 % CI]", "diff": "LSTM minus baseline (points)",
+                         "coef": "baseline weights (standardised features; + means heavy)"})
+    return accs, minus, table, beats
+
+
+def compute(runner: Runner) -> Table1:
+    """The chapter *Table 1* on ``runner``'s preset and data set: every run of it, cached."""
+    from study.learn.model import Classifier  # torch: the network's size
+
+    p, ds = runner.preset, runner.dataset
+    g = grid_search(runner)
+    prefetch(runner, g)
+    grid_table, grid_failed, grid_runs = _grid_table(g, p)
+    protocol_numbers, protocol_table, facts = _protocols(runner.protocol_runs(g.config))
+    seeds = {"positions": seed_runs(runner, g.config), "velocity": seed_runs(runner, g.velocity_config)}
+    rows: dict[Inputs, dict[Dims, Row]] = {"positions": {}, "velocity": {}}
+    table, spread, picked = [], [], {}
+    for inputs, cfg in (("positions", g.config), ("velocity", g.velocity_config)):
+        for d in ORDER:
+            rows[inputs][d], t_row, s_row, picked[inputs, d] = _row(runner, inputs, cfg, seeds[inputs], d)
+            table.append(t_row)
+            spread.append(s_row)
+    diffs = {k: bootstrap_difference(s.first.where(dims="xyz").correct(), s.first.where(dims="z").correct())
+             for k, s in seeds.items()}  # X, Y, Z minus Z, paired on the test throws, for each input
+    positions = rows["positions"]
+    overall = verdicts.combined([positions[d].paper_way.decision for d in ORDER])  # type: ignore[misc]
+    ablation, ablation_table, abl_diffs = _ablation(runner, g.winners)
+    base_acc, base_minus, baseline_table, beats = _baseline(runner.baseline_runs(), seeds["positions"].first)
+    numbers = Numbers(
+        GridNumbers(count(grid_failed, "grid runs that failed to train (all cells)")), protocol_numbers, positions,
+        Velocity(rows["velocity"], number(diffs["velocity"], "with velocity: X, Y, Z minus Z only, mean over seeds",
+                                          signed=True)),
+        Verdict(overall, "Table 1, both inputs: the paper's best against the run validation picks"),
+        number(diffs["positions"], "X, Y, Z minus Z only, mean over seeds", decision=verdicts.order(diffs["positions"], +1),
+               signed=True),
+        ablation, base_acc, base_minus)
+    vel_xyz = seeds["velocity"].first.where(dims="xyz")
+    return Table1(
+        numbers, g.config, g.velocity_config, seeds, picked, grid_table, protocol_table,
+        Table(table, {"inputs": "the network reads", "dims": "trajectory dimension(s)", "paper": "paper, best",
+                      "paper_way": "ours, the run validation picks [95 % CI]", "picked": "that run, per data set (%)",
+                      "mean": f"ours, mean of {len(p.seeds)} seeds, data set 1 [95 % CI]", "verdict": "verdict"}),
+        Table(spread, {"inputs": "the network reads", "dims": "input", "seeds": "each seed, data set 1 (%)",
+                       "t": "their mean, t-interval", "across": f"{len(p.data_seeds)} data sets x {len(p.grid_seeds)} "
+                       "seeds [hierarchical 95 % CI]", "share": "variance between data sets", "runs": "runs"}),
+        ablation_table, baseline_table,
+        n_params=sum(t.numel() for t in Classifier(3).parameters()), length_s=p.length,
+        length_frames=round(p.length * ds.fps), n_train=len(ds.train), n_test=len(ds.test), min_epochs=p.min_epochs,
+        patience=p.patience, max_epochs=p.max_epochs, n_grid_seeds=len(p.grid_seeds), n_seeds=len(p.seeds),
+        n_data=len(p.data_seeds), first_patience=p.first_patience, first_max_epochs=p.first_max_epochs,
+        grid_runs=grid_runs, lstm_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("peephole")),
+        gru_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("gru")), defaults_moved=paper.differs_from_defaults(g.config, p),
+        abl_diffs=abl_diffs, base_beats=beats, vel_xyz_accuracies=tuple(vel_xyz.accuracies().tolist()),
+        vel_failed_xyz=vel_xyz.n_failed, shares=tuple(r["share"] for r in spread), **facts)  # type: ignore[arg-type]
