@@ -137,19 +137,19 @@ def main() -> None:
             shapes += [(1024, 90), (1024, 300)]
         for B, T in shapes:
             compiled = device == "cpu" and native.active() is not None
-            cells = ("lstm", "peephole", "peephole-ng", "peephole-pt", "gru", "gru-pt") if compiled else ("lstm", "peephole")
+            cells = ("torch-lstm", "peephole", "peephole-ng", "peephole-pt", "gru", "gru-pt") if compiled else ("torch-lstm", "peephole")
             res = time_steps(cells, B, T, steps if device == "cpu" else 10, device)
             for cell, s in res.items():
-                ratio = res["lstm"] / s
+                ratio = res["torch-lstm"] / s
                 print(f"{device:6} {B:5d} {T:4d} {cell:11} {s * 1e3:9.1f} {B / s:9.0f} "
                       f"{EPOCH_SEQUENCES / B * s:8.2f} {ratio:6.2f}")
             if compiled:
                 print(f"{'':17} compiled GRU vs nn.GRU: {res['gru-pt'] / res['gru']:.2f}x; "
                       f"finiteness check: peephole {res['peephole'] / res['peephole-ng']:.3f}x the unchecked step")
     frames = 300 if a.quick else 2000
-    stream = {c: time_stream(c, frames) for c in ("lstm", "peephole")}
+    stream = {c: time_stream(c, frames) for c in ("torch-lstm", "peephole")}
     fast = time_streamer(frames)
-    print(f"streaming, one trajectory, CPU, Classifier.step (PyTorch): nn.LSTM {stream['lstm'] * 1e6:.0f} us/frame, "
+    print(f"streaming, one trajectory, CPU, Classifier.step (PyTorch): nn.LSTM {stream['torch-lstm'] * 1e6:.0f} us/frame, "
           f"peephole {stream['peephole'] * 1e6:.0f} us/frame")
     print(f"streaming, one trajectory, CPU, study.stream.Streamer (NumPy), peephole: {fast * 1e6:.1f} us/frame "
           f"(target < 50 us; {stream['peephole'] / fast:.1f}x Classifier.step)")

@@ -223,7 +223,7 @@ def test_layer_without_grad_equals_layer_with_grad(backend):
 
 
 @pytest.mark.parametrize("inputs", INPUTS)
-@pytest.mark.parametrize("cell", ["peephole", "no-peephole", "lstm"])
+@pytest.mark.parametrize("cell", ["peephole", "no-peephole", "torch-lstm"])
 def test_numpy_streamer_equals_whole_sequence(cell, inputs):
     torch.manual_seed(0)
     net = normalised(Classifier(3, hidden=8, layers=2, cell=cell, inputs=inputs, fps=30.0).double().eval())

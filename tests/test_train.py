@@ -235,7 +235,7 @@ def _forget_biases(net) -> torch.Tensor:
                         for k in range(net.rnn.num_layers)])
 
 
-@pytest.mark.parametrize("cell", ["peephole", "no-peephole", "lstm"])
+@pytest.mark.parametrize("cell", ["peephole", "no-peephole", "torch-lstm"])
 def test_forget_bias_is_added_to_every_forget_gate(cell):
     from study.learn.model import Classifier
 
@@ -250,7 +250,7 @@ def test_forget_bias_is_added_to_every_forget_gate(cell):
     assert all(torch.equal(before[k], v) for k, v in a.state_dict().items())
 
 
-@pytest.mark.parametrize("cell", ["peephole", "lstm"])
+@pytest.mark.parametrize("cell", ["peephole", "torch-lstm"])
 def test_chrono_initialisation_spans_the_input(cell):
     from study.learn.model import Classifier
 

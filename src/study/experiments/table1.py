@@ -34,7 +34,7 @@ from study.learn.metrics import (PLATEAU_LOSS, Interval, between_share, bootstra
                                  hierarchical_bootstrap, t_interval)
 
 CELL_NAMES: dict[Cell, str] = {"peephole": "peephole LSTM (paper)", "no-peephole": "LSTM, peepholes fixed at 0",
-                               "lstm": "LSTM (torch.nn.LSTM)", "gru": "GRU"}
+                               "torch-lstm": "LSTM (torch.nn.LSTM)", "gru": "GRU"}
 """Each cell in words."""
 INPUT_NAMES: dict[Inputs, str] = {"positions": "positions (the paper's)", "velocity": "with velocity (beyond the paper)"}
 """What the network reads, in words."""

@@ -17,7 +17,7 @@ from study.core.errors import ConfigError, TrajectoryError, check_range
 
 Dims = Literal["z", "xyz"]
 """Input dimensions by name: the height only, or all three coordinates."""
-Cell = Literal["peephole", "no-peephole", "lstm", "gru"]
+Cell = Literal["peephole", "no-peephole", "torch-lstm", "gru"]
 """Recurrent cells the classifier offers: the paper's peephole LSTM; the same layer with its peepholes fixed
 at zero (an LSTM without peepholes on the same compiled loop: the ablation's control); ``nn.LSTM``;
 ``nn.GRU`` (as :class:`study.learn.gru.GRU`, on a compiled loop too)."""
@@ -102,7 +102,7 @@ class TrainConfig:
     seed: int = 0
     """Seeds the validation split, the initial weights, the batch order and the dropout masks."""
     cell: Cell = "peephole"
-    """Recurrent cell: 'peephole' (the paper's), 'no-peephole' (the same layer, peepholes fixed at 0), 'lstm'
+    """Recurrent cell: 'peephole' (the paper's), 'no-peephole' (the same layer, peepholes fixed at 0), 'torch-lstm'
     (nn.LSTM) or 'gru' (nn.GRU)."""
     inputs: Inputs = "positions"
     """What the network reads: 'positions' (each coordinate over its standard deviation, the paper's) or

@@ -98,7 +98,7 @@ class Streamer:
             for layer in net.rnn.layers:
                 self.layers.append(_Layer(get(layer.weight_ih), get(layer.weight_hh), get(layer.bias),
                                           get(layer.w_ci), get(layer.w_cf), get(layer.w_co), dtype))
-        elif net.cell_type == "lstm":
+        elif net.cell_type == "torch-lstm":
             for k in range(net.rnn.num_layers):
                 p = {n: get(getattr(net.rnn, f"{n}_l{k}")) for n in ("weight_ih", "weight_hh", "bias_ih", "bias_hh")}
                 zero = np.zeros(net.rnn.hidden_size)
