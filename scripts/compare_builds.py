@@ -5,9 +5,10 @@ they are *identical*, as they must be after a change that only moves code (a ref
 key, so the runs are trained again and must come out the same bit for bit). For two project roots that
 each hold a built book (``_build/results.json``) and its caches (``data/``):
 
-- every number present in either results file: value, interval, method, unit, paper value, verdict and
-  description equal; of its source, everything but the dataset key (which hashes the simulation's code);
-  timings (names with ``time.``) are listed, not compared;
+- every number and verdict present in either results file (of either format; the first format's names read
+  under today's, ``study.book.results.RENAMED``): value, interval, method, unit, paper value, verdict, the
+  inputs it was decided from, and description equal; of its source, everything but the dataset key (which
+  hashes the simulation's code); timings (names with ``time.``) are listed, not compared;
 - every run record of either ``data/runs/``, paired with the other build's record of the same run (the same
   training config, the same test flag, on a dataset with the same config and seed, or, for a dataset with no
   file of its own, the same config and test split size): equal in everything but its key, its dataset key and
@@ -27,6 +28,9 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
+
+from study.book import results
+from study.experiments.reported import Number
 
 TIMING = ("time.",)
 """Names of numbers that are wall-clock times: listed, never compared."""
@@ -65,10 +69,21 @@ def records(root: Path) -> dict[str, list[dict]]:
     return out
 
 
+def _leaf(leaf) -> dict:
+    """What a results file says of one number or verdict, in either format: everything but how it is displayed
+    (``signed``) and the dataset key its source names (which hashes the simulation's code)."""
+    out = {"what": leaf.what, "verdict": leaf.verdict,
+           "decision": None if leaf.decision is None else leaf.decision.inputs,
+           "source": {k: v for k, v in leaf.source.items() if k != "data_key"}}
+    if isinstance(leaf, Number):
+        out.update(value=leaf.value, lo=leaf.lo, hi=leaf.hi, method=leaf.method, unit=leaf.unit, paper=leaf.paper)
+    return json.loads(_canon(out))
+
+
 def compare_results(a: Path, b: Path) -> tuple[int, int, list[str]]:
-    """(numbers compared, numbers that differ, messages)."""
-    A = {n["name"]: n for n in json.loads(a.read_text())["numbers"]}
-    B = {n["name"]: n for n in json.loads(b.read_text())["numbers"]}
+    """(numbers and verdicts compared, those that differ, messages). Either file may be of either results format;
+    a file of the first is read under today's names (``study.book.results.RENAMED``)."""
+    A, B = results.load(a), results.load(b)
     msgs, compared, differ = [], 0, 0
     for name in sorted(set(A) | set(B)):
         if name not in A or name not in B:
@@ -77,13 +92,11 @@ def compare_results(a: Path, b: Path) -> tuple[int, int, list[str]]:
             continue
         if any(t in name for t in TIMING):
             continue
-        x, y = dict(A[name]), dict(B[name])
-        sx, sy = x.pop("source", {}), y.pop("source", {})
-        sx.pop("data_key", None), sy.pop("data_key", None)
+        x, y = _leaf(A[name]), _leaf(B[name])
         compared += 1
-        if _canon(x) != _canon(y) or _canon(sx) != _canon(sy):
+        if x != y:
             differ += 1
-            diff = {k: (x.get(k), y.get(k)) for k in x if x.get(k) != y.get(k)} or {"source": "differs"}
+            diff = {k: (x.get(k), y.get(k)) for k in x if x.get(k) != y.get(k)}
             msgs.append(f"differs: {name}: {diff}")
     return compared, differ, msgs
 

@@ -3,8 +3,10 @@
 The book's Table 1 comes from one machine, one time loop (the compiled one, where a compiler exists)
 and one data seed. This script trains Table 1's runs again at the same configuration (read from a
 build's results file) with the PyTorch time loop instead of the compiled one (``--backend torch``), or
-on a dataset simulated from another seed (``--data-seed 1``), and writes the same numbers under the
-same names. With ``--light-priors balls`` it trains them on the study's first light prior (balls'
+on a dataset simulated from another seed (``--data-seed 1``), and writes the mean of the seeds under the book's
+names, beside the run validation picks on that one data set (``table1.<dims>.validation_pick``: the book's
+statistic, ``study.experiments.stats.validation_pick``, over one data set instead of the book's several).
+With ``--light-priors balls`` it trains them on the study's first light prior (balls'
 masses and restitutions, ``study.simulate.synth.LIGHT_BALLS``) instead of the box-like one. Then
 
     study results _build/results.json --compare table1-torch.json
@@ -58,6 +60,8 @@ def main(argv: list[str] | None = None) -> int:
 
     from study.book import results
     from study.experiments import Runner, preset, stats
+    from study.experiments.reported import count, number
+    from study.experiments.text import fmt
     from study.learn.train import TrainConfig
     from study.simulate import synth
 
@@ -70,21 +74,21 @@ def main(argv: list[str] | None = None) -> int:
     if a.light_priors == "balls":
         synth_cfg = synth_cfg.replace(light=synth.LIGHT_BALLS)
     ds = synth.dataset(synth_cfg, seed=a.data_seed, data_dir=a.data_dir)
-    rows = Runner(ds, p, a.data_dir.resolve(), workers=a.workers, progress=True).seed_runs(cfg)
-    with tempfile.TemporaryDirectory() as tmp:
-        part = Path(tmp) / "table1.json"
-        os.environ[results.ENV] = str(part)
-        res = results.Results("table1")
-        for d, s in ((r["dims"], r) for r in stats.summarise(rows, ("dims",))):
-            best, best_iv = stats.best_run_interval([r for r in rows if r["dims"] == d])
-            res.add(f"{d}.best", best_iv, what=f"best seed, {d}", seed=best["seed"])
-            res.add(f"{d}.mean", s["interval"], what=f"mean over seeds, {d}", config=dataclasses.asdict(cfg))
-            res.add(f"{d}.failed", s["failed"], unit="count", what="seeds that failed to train")
-        res.save()
-        results.merge([part], a.out, f"{a.preset} (backend {a.backend}, data seed {a.data_seed}, "
-                                     f"light priors {a.light_priors})")
-    for n in results.load(a.out).values():
-        print(f"{n.name}: {results.fmt(n)}")
+    runs = Runner(ds, p, a.data_dir.resolve(), workers=a.workers, progress=True).seed_runs(cfg)
+    leaves = []
+    for d in ("xyz", "z"):
+        these = runs.where(dims=d)
+        pick = stats.validation_pick([these])  # the book's statistic, over this one data set
+        s = stats.summary(these)
+        leaves += [(f"table1.{d}.validation_pick", number(pick.interval, f"the run validation picks, {d}",
+                                                          seed=pick.picked[0].seed)),
+                   (f"table1.{d}.mean", number(s.interval, f"mean over seeds, {d}", config=dataclasses.asdict(cfg))),
+                   (f"table1.{d}.failed", count(s.failed, "seeds that failed to train"))]
+    a.out.parent.mkdir(parents=True, exist_ok=True)
+    a.out.write_text(results.dumps(leaves, preset=f"{a.preset} (backend {a.backend}, data seed {a.data_seed}, "
+                                                  f"light priors {a.light_priors})"))
+    for name, n in results.load(a.out).items():
+        print(f"{name}: {fmt(n)}")
     print(f"written: {a.out}", file=sys.stderr)
     return 0
 

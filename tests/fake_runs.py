@@ -14,10 +14,13 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import numpy as np
+import torch
 
 from study.core.cache import write_text_atomic
-from study.experiments import runs
-from study.learn.config import TrainConfig
+from study.experiments import rockets, runs
+from study.learn import train
+from study.learn.config import DIMS, TrainConfig
+from study.learn.model import Classifier
 from study.learn.metrics import failed_to_train, metrics
 from study.simulate.data import Dataset
 
@@ -58,3 +61,23 @@ def cache_records(runner, cfgs: Iterable[TrainConfig], score: Callable[[TrainCon
         for t in (True, False) if test else (False,):
             rec = record(ds, cfg, t, score(cfg), None if val_score is None else val_score(cfg))
             write_text_atomic(runs.record_path(runner.data_dir, rec["key"]), json.dumps(rec) + "\n")
+
+
+def cache_models(runner, cfgs: Iterable[TrainConfig], dataset: Dataset | None = None) -> None:
+    """An untrained model of each of ``cfgs`` (its weights as initialised under ``torch.manual_seed(cfg.seed)``)
+    saved where ``runner.trained`` looks for the kept model, so experiments that load models find them."""
+    ds = dataset or runner.dataset
+    for cfg in cfgs:
+        torch.manual_seed(cfg.seed)
+        net = Classifier(len(DIMS[cfg.dims]), cfg.hidden, cfg.layers, cfg.dropout, cfg.cell, inputs=cfg.inputs,
+                         fps=ds.fps)
+        train.TrainedModel(net, cfg, ds.fps, ds.key).save(runs.model_dir(ds, cfg, runner.data_dir))
+
+
+def cache_rocket(runner, dims: str, n_frames: int, seed: int, tests: dict[str, np.ndarray],
+                 labels: dict[str, np.ndarray], train_x: np.ndarray | None = None) -> None:
+    """A MiniRocket fit's record (``study.experiments.rockets``) whose labels on each of ``tests`` are ``labels``,
+    so ``runner.rocket(dims, n_frames, seed, tests, train_x)`` reads them instead of fitting."""
+    key = rockets.rocket_key(runner.dataset, dims, n_frames, seed, tests, train_x)  # type: ignore[arg-type]
+    body = {"key": key, "format": rockets.FORMAT, "predictions": {k: np.asarray(v).tolist() for k, v in labels.items()}}
+    write_text_atomic(Path(runner.data_dir) / "rocket" / f"{key}.json", json.dumps(body) + "\n")

@@ -194,7 +194,7 @@ def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.mark.slow
 def test_build_executes_injects_and_renders(tiny: Path) -> None:
-    book.render(tiny)
+    book.render_html(tiny)
     nb = nbformat.read(executed(tiny, "alpha"), as_version=4)
     injected = [c for c in nb.cells if "injected-parameters" in c.metadata.get("tags", [])]
     assert len(injected) == 1 and "preset = \"smoke\"" in injected[0].source
@@ -400,11 +400,14 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
             assert text.count("<img") >= pngs, ch.stem
             figures += pngs
     assert figures >= 9  # the smoke book has nine figures at least, each an image
-    from study.book import results
+    from study.book import results, summary
 
-    built = results.load(tmp_path / results.FILE)
+    built = results.load(tmp_path / results.FILE)  # refuses a stored verdict its inputs do not decide
     decided = [n for n in built.values() if n.verdict]
     assert len(decided) >= 15 and results.recompute(built) == [], "every verdict follows from its stored inputs"
+    page = summary.compute(tmp_path / results.FILE, "smoke")  # the summary page's rows, read as typed results
+    assert len(page.rows) == len(summary.ROWS) and all(r.verdict for r in page.rows)
+    assert all(r.ours for r in page.rows if r.kind in ("number", "order")), "every row of the summary has its number"
 
 
 def test_chapters_show_the_code_that_teaches_not_the_plumbing() -> None:
@@ -425,16 +428,30 @@ def test_chapters_show_the_code_that_teaches_not_the_plumbing() -> None:
                 assert not any("glue(" in line for line in lines), f"{source.name}, code cell {i}: glue in a shown cell"
 
 
-def test_no_chapter_types_a_verdict() -> None:
-    """Verdicts are decided by study.book.results from numbers, never written: no code cell of any chapter passes a
-    verdict word as a string literal to anything that records or builds a verdict, or compares a verdict with one
-    to choose another."""
+def test_no_chapter_hides_more_than_15_lines_of_code() -> None:
+    """A chapter's science lives in the package: its hidden cells (remove-cell, remove-input, hide-input,
+    hide-cell) hold at most 15 code lines that are not blank and not comments, parameter and import cells
+    included (as ../shared/tools/hidden_lines.py counts them)."""
     import jupytext
 
-    from study.book import results
+    hidden_tags = {"remove-cell", "remove-input", "hide-input", "hide-cell"}
+    for source in sorted((REPO / "book").glob("*.md")):
+        nb = jupytext.read(source, fmt="md:myst")
+        hidden = sum(1 for c in nb.cells if c.cell_type == "code" and hidden_tags & set(c.metadata.get("tags", []))
+                     for line in c.source.splitlines() if line.strip() and not line.strip().startswith("#"))
+        assert hidden <= 15, f"{source.name}: {hidden} hidden code lines; move the computation into study"
 
-    words = set(results.VERDICTS)
-    takers = {"verdict", "add", "Decision", "combine"}
+
+def test_no_chapter_types_a_verdict() -> None:
+    """Verdicts are decided by study.experiments.verdicts from numbers, never written: no code cell of any chapter
+    passes a verdict word as a string literal to anything that records or builds a verdict, or compares a verdict
+    with one to choose another."""
+    import jupytext
+
+    from study.experiments import verdicts
+
+    words = set(verdicts.VERDICTS)
+    takers = {"verdict", "add", "Decision", "combine", "Verdict", "number", "order", "combined"}
     for source in sorted((REPO / "book").glob("*.md")):
         nb = jupytext.read(source, fmt="md:myst")
         for i, cell in enumerate(c for c in nb.cells if c.cell_type == "code"):

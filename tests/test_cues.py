@@ -1,11 +1,23 @@
-"""What a window of each trajectory holds: the rules of study.experiments.cues on a toy set whose only cue is drag."""
+"""The chapter *What the network sees* (study.experiments.cues): each step on toy data whose only cue is known, the
+result assembled from fake parts, and the whole computation on run records written into a fresh cache."""
 
 from __future__ import annotations
 
-import numpy as np
+import dataclasses
+import json
+from types import SimpleNamespace
 
-from study.experiments import cues
-from study.simulate import data
+import numpy as np
+import pytest
+
+from fake_runs import cache_records
+from study.book import results
+from study.experiments import Runner, cues, paper, runs
+from study.experiments.runtable import Run, Runs
+from study.experiments.tracker import TrackerError
+from study.learn.config import TrainConfig
+from study.learn.metrics import bootstrap_accuracy
+from study.simulate import data, observe
 
 
 def drag_only(n: int, seed: int, fps: float = 30.0, frames: int = 60) -> data.Split:
@@ -65,3 +77,226 @@ def test_mixed_shapes_pool_the_training_splits_and_name_their_parts():
     np.testing.assert_array_equal(mixed.train.x[10:], b.train.x)
     other = cues.mixed_shapes({"cube": a, "ball": b}, names=("ball", "cube"))
     assert mixed.key and other.key and mixed.key != other.key, "the key names its parts, in order"
+
+
+# --- The chapter's computation, step by step -----------------------------------------------------
+
+
+def test_the_drag_cue_is_fitted_on_train_and_blurred_by_noise():
+    ds = data.Dataset(train=drag_only(200, 0), test=drag_only(200, 1), fps=30.0)
+    drag = cues.drag_cue(ds, 12, contact_height=0.15, noise_mm=[0, 5, 200])
+    assert list(drag.noisy) == [5, 200], "no noise is the exact rule, not a noisy one"
+    assert drag.exact.value > 0.9 and drag.rule["direction"] == "<="  # heavy: the steeper (more negative) fall
+    assert drag.median["light"] == pytest.approx(-9.3, abs=0.05) and drag.median["heavy"] == pytest.approx(-9.8, abs=0.05)
+    assert drag.noisy[200].value < drag.noisy[5].value <= drag.exact.value + 1e-9
+    assert drag.fall.shape == (200,) and (drag.y == ds.test.y).all()
+
+
+class Threshold:
+    """A fake model: heavy where the mean height of the input is below ``cut`` metres."""
+
+    def __init__(self, cut: float):
+        self.cut = cut
+
+    def predict_proba(self, x: np.ndarray) -> np.ndarray:
+        heavy = (np.asarray(x)[..., 2].mean(axis=1) < self.cut).astype(float)
+        return np.column_stack([1 - heavy, heavy])
+
+
+def two_heights(n: int = 40, frames: int = 30) -> tuple[np.ndarray, np.ndarray]:
+    """Light throws resting at 0.6 m, heavy at 0.3 m: (n, frames, 3) metres and labels."""
+    y = (np.arange(n) % 2).astype(np.int64)
+    x = np.zeros((n, frames, 3))
+    x[..., 2] = np.where(y == 1, 0.3, 0.6)[:, None]
+    return x, y
+
+
+def test_robustness_scores_each_group_at_each_point_and_skips_rates_it_cannot_film():
+    x, y = two_heights()
+    O = observe.Observation
+    sweeps = {"scale": cues.Sweep("height-scale factor", [1.0, 4.0], lambda v: O(height_factor=v)),
+              "fps": cues.Sweep("camera frame rate, fps", [15, 60], lambda v: O(camera_fps=float(v)))}
+    models = {"exact": [Threshold(0.45)], "random": [Threshold(0.45), Threshold(10.0)]}
+    points = cues.robustness(models, x, y, 30.0, 20, sweeps)
+    assert [(p.sweep, p.value, p.group) for p in points] == [
+        ("scale", 1.0, "exact"), ("scale", 1.0, "random"), ("scale", 4.0, "exact"), ("scale", 4.0, "random"),
+        ("fps", 15, "exact"), ("fps", 15, "random")], "60 fps needs the high-rate throws, which were not given"
+    at = {(p.sweep, p.value, p.group): p.interval.value for p in points}
+    assert at["scale", 1.0, "exact"] == 1.0 and at["scale", 1.0, "random"] == 0.75  # one of its two calls all heavy
+    assert at["scale", 4.0, "exact"] == 0.5, "heights four times too high: every throw looks light"
+
+
+def test_accuracy_by_parameter_and_inside_the_overlap():
+    n = 16
+    y = (np.arange(n) % 2).astype(np.int64)
+    e = np.where(y == 0, np.linspace(0.4, 0.9, n), np.linspace(0.1, 0.6, n))
+    split = data.Split(np.zeros((n, 2, 3), np.float32), y, {"restitution": e})
+    correct = np.stack([(e < 0.4) | (e > 0.5)] * 2)  # both seeds wrong inside [0.4, 0.5]
+    bins = cues.by_parameter(correct, split, "restitution", bins=2)
+    assert [(b.label, b.index, b.n) for b in bins] == [(0, 0, 4), (0, 1, 4), (1, 0, 4), (1, 1, 4)]
+    assert bins[1].accuracy == 1.0 and bins[1].centre > bins[0].centre
+    prior = SimpleNamespace(light=SimpleNamespace(restitution=(0.4, 0.9)), heavy=SimpleNamespace(restitution=(0.1, 0.5)))
+    ov = cues.overlap(correct, e, prior)
+    assert (ov.lo, ov.hi) == (0.4, 0.5) and ov.inside.value == 0.0 and ov.outside.value == 1.0
+
+
+def test_shape_keys_are_the_results_file_names():
+    assert [cues.shape_key(n) for n in cues.SHAPES] == ["20_cm_cube", "10_cm_cube", "30_cm_cube",
+                                                        "flat_box_30_x_30_x_10_cm", "ball", "cylinder"]
+
+
+# --- The chapter's result from its parts ---------------------------------------------------------
+
+
+def runs_right(dims: str, rights: list[np.ndarray]) -> Runs:
+    """Runs of ``dims``, one per seed, right on the test throws ``rights[s]`` (bool)."""
+    return Runs(Run(TrainConfig(dims=dims, seed=s), 0.7, 0.4, 3, 1, 1.0, False, accuracy=float(r.mean()),
+                    correct=np.asarray(r, bool)) for s, r in enumerate(rights))
+
+
+def rule(feature: str, train: float, right: np.ndarray) -> dict:
+    return {"feature": feature, "threshold": 0.0, "direction": ">", "train_accuracy": train,
+            "test_accuracy": float(right.mean()), "correct": right, "interval": bootstrap_accuracy(right)}
+
+
+N = 80
+RNG = np.random.default_rng(0)
+
+
+def right(share: float) -> np.ndarray:
+    """(N,) bool, right on about ``share`` of the throws."""
+    return RNG.random(N) < share
+
+
+def parts(network_b: float, rule_b: float = 0.6) -> dict:
+    """The chapter's parts, the network without air right on ``network_b`` of the throws, the best rule on
+    ``rule_b``; the rule that is best on the test split is not the one training picks."""
+    a = runs_right("z", [right(0.8)] * 2) + runs_right("xyz", [right(0.85)] * 2)
+    b = runs_right("z", [right(network_b)] * 2) + runs_right("xyz", [right(network_b)] * 2)
+    rules = {k: [rule("bounces", 0.7, right(rule_b)), rule("fall_acceleration", 0.6, right(0.95 if k == "a" else 0.5)),
+                 rule("distance", 0.65, right(0.99))] for k in ("a", "b", "c")}
+    correct = {("a", "xyz"): a.where(dims="xyz").correct(), ("a", "z"): a.where(dims="z").correct(),
+               ("b", "xyz"): b.where(dims="xyz").correct(), ("b", "z"): b.where(dims="z").correct(),
+               ("c", "z"): np.stack([right(0.6)] * 2), ("d", "z"): np.stack([right(0.7)] * 2)}
+    cond = cues.Conditions(a, b, [], [], correct, rules)
+    ds = data.Dataset(train=drag_only(60, 0), test=drag_only(60, 1), fps=30.0)
+    sweeps = {"drop": cues.Sweep("share of frames lost", [0.0, 0.1], lambda v: observe.Observation(drop=v))}
+    points = [cues.Point("drop", v, g, bootstrap_accuracy(right(0.7))) for v in (0.0, 0.1) for g in cues.GROUPS]
+    shapes = [cues.ShapeScore(n, bootstrap_accuracy(right(0.6)), bootstrap_accuracy(right(0.7))) for n in cues.SHAPES]
+    return dict(drag=cues.drag_cue(ds, 12, 0.15, [0, 2, 10]), tracker=TrackerError(1.1, 0.015, 0.02, 120, 0.0138),
+                cond=cond, fitted=(bootstrap_accuracy(right(0.8)), bootstrap_accuracy(right(1.0))), exact=0.86,
+                sweeps=sweeps, points=points, by={}, errors=cues.Overlap(0.35, 0.5, bootstrap_accuracy(right(0.5)),
+                                                                         bootstrap_accuracy(right(0.9))),
+                shapes=shapes, n_videos=4, length_frames=12)
+
+
+@pytest.fixture(scope="module")
+def beats():
+    return cues.assemble(**parts(network_b=0.95))
+
+
+def test_every_number_keeps_its_name_and_reads_back_from_the_results_file(beats, tmp_path):
+    names = [name for name, _ in beats.numbers.entries()]
+    assert {"cues.drag_rule.exact", "cues.drag_rule.noise_2mm", "cues.drag_rule.noise_10mm", "cues.tracker.noise_m",
+            "cues.tracker.drop", "cues.condition_a.xyz", "cues.condition_c.z", "cues.condition_d.z", "cues.best_rule_b",
+            "cues.drag_rule_c", "cues.ceiling.restitution_friction", "cues.ceiling.with_mass", "cues.ceiling.exact",
+            "cues.network_minus_rule_b.xyz", "cues.network_minus_rule_b.z", "cues.claim_without_drag",
+            "cues.robustness.drop.0.exact", "cues.robustness.drop.0.1.random", "cues.errors.overlap_z",
+            "cues.errors.outside_z", "cues.shape.20_cm_cube.cube_model", "cues.shape.ball.mixed_model"} <= set(names)
+    assert len(names) == len(set(names)) == 3 + 2 + 6 + 3 + 3 + 3 + 2 + 1 + 4 + 2 + 12
+    assert "cues.condition_c.xyz" not in names, "one camera gives a height: (c) and (d) are Z only"
+    assert beats.numbers.tracker.noise_m.unit == "m" and beats.numbers.ceiling.exact.exact
+    f = tmp_path / "results.json"
+    f.write_text(results.dumps(beats.numbers.entries()))
+    assert cues.Numbers.read(results.load(f)) == beats.numbers
+
+
+def test_the_best_rule_is_chosen_on_training_accuracy_never_on_the_test_split(beats):
+    assert beats.conditions.best_rule("b")["feature"] == "bounces", "distance is better on test, worse on train"
+    assert "(bounces)" in beats.numbers.best_rule["b"].what
+    assert beats.numbers.drag_rules["a"].value == beats.conditions.drag_rule("a")["interval"].value
+
+
+def test_the_verdicts_and_sentences_follow_from_the_numbers(beats):
+    n = beats.numbers
+    assert all(m.verdict == "reproduced" and m.signed for m in n.network_minus_rule_b.values())
+    assert n.claim_without_drag.verdict == "reproduced"
+    assert "the networks still beat the best one-feature rule" in beats.cue_verdict
+    loses = cues.assemble(**parts(network_b=0.3))
+    assert {m.verdict for m in loses.numbers.network_minus_rule_b.values()} == {"differs"}
+    assert loses.numbers.claim_without_drag.verdict == "differs"
+    assert "does not beat the best one-feature rule for X, Y, Z (differs) and Z only (differs)" in loses.cue_verdict
+    assert "does not rest on drag" not in loses.cue_verdict, "(b) lies below (a): the drag cue carried part of it"
+    acc = beats.conditions.accuracy
+    assert f"{100 * (acc['c', 'z'].value - acc['a', 'z'].value):+.1f} points" in beats.obs_verdict
+
+
+def test_the_tables_and_the_chapter_s_words(beats):
+    rows = beats.cue_table.rows
+    assert [r["condition"] for r in rows] == list(cues.CONDITIONS.values())
+    assert rows[3]["drag"] == rows[3]["best"] == rows[3]["xyz"] == "—" and rows[2]["xyz"] == "—"
+    assert rows[1]["best"].endswith("(bounces)")
+    assert [r["noise"] for r in beats.drag_noise_table.rows] == ["2 mm", "10 mm"]
+    assert [r["seen"] for r in beats.shape_table.rows] == ["yes", "no", "no", "yes", "yes", "yes"]
+    assert (beats.noise_mm, beats.noise_px, beats.mm_per_px, beats.n_cal_frames) == ("15.0", "1.10", "13.8", 120)
+    assert beats.overlap_range == "0.35–0.5" and beats.ceil_gap == f"{100 * (0.86 - beats.numbers.ceiling.restitution_friction.value):+.1f}"
+    assert beats.n_sweeps == 1 and beats.length_frames == 12
+
+
+# --- The whole computation, every run read from fake records -------------------------------------
+
+
+def _score(c: TrainConfig) -> float:
+    """Test accuracy of a fake run: X, Y, Z above Z; a run without air below one with; random observations lower."""
+    return 0.6 + 0.2 * (c.dims == "xyz") - 0.1 * (c.observe == "randomised")
+
+
+@pytest.fixture(scope="module")
+def whole(tmp_path_factory):
+    mp = pytest.MonkeyPatch()
+    runner = Runner.open("smoke", data_dir=tmp_path_factory.mktemp("data"), workers=1)
+    p = runner.preset
+
+    def would_train(*args, **kwargs):
+        raise AssertionError(f"the chapter trained a run instead of reading its record: {args[1]}")
+
+    mp.setattr(runs, "run", would_train)
+    mp.setattr(Runner, "rendered", lambda self: (["rendered.mp4"] * 3, None))
+    mp.setattr(Runner, "tracker_error", lambda self: TrackerError(1.0, 0.014, 0.05, 90, 0.014))
+    mp.setattr(Runner, "models", lambda self, cfg, seeds, **changes: [Threshold(0.3 + 0.1 * s) for s in seeds])
+    toy = {name: dataclasses.replace(runner.dataset, meta={**runner.dataset.meta, "key": f"shape-{i}"})
+           for i, name in enumerate(cues.SHAPES)}  # the smoke throws under six names: no new simulation
+    mp.setattr(cues, "shape_sets", lambda *args, **kwargs: toy)
+    cache_records(runner, paper.grid_configs(p, "peephole"), test=False)
+    cfg = runner.table1_config()
+    for r, cfgs, test in cues.condition_configs(runner, cfg):
+        cache_records(r, cfgs, _score, test=test, val_score=lambda c: 0.7)  # Table 1's grid point keeps its score
+    mixed = runner.on(runner.saved(cues.mixed_shapes(toy), "mixed"))
+    cache_records(mixed, paper.seed_configs(cfg, p.grid_seeds, ("z",)))
+    sweeps = {"fps": cues.Sweep("camera frame rate, fps", [15, 120], lambda v: observe.Observation(camera_fps=v))}
+    try:
+        yield runner, cues.compute(runner, [0, 5], sweeps)
+    finally:
+        mp.undo()
+
+
+def test_compute_reads_every_run_from_its_record_and_scores_the_models_as_observed(whole):
+    runner, result = whole
+    n = result.numbers
+    assert n.conditions["a"]["xyz"].value == pytest.approx(0.8, abs=1 / 16)
+    assert n.conditions["a"]["z"].value == pytest.approx(0.6, abs=1 / 16) and set(n.conditions["c"]) == {"z"}
+    assert "2 seeds" in n.conditions["b"]["z"].method, "the grid's seeds"
+    assert list(n.drag_rule.noise) == ["5"] and n.tracker.noise_m.value == 0.014
+    assert list(n.robustness["fps"].points) == ["15", "120"], "120 fps filmed from the high-rate throws"
+    assert list(n.shape) == [cues.shape_key(s) for s in cues.SHAPES]
+    assert result.n_videos == 3 and result.length_frames == runner.table1_config().n_frames(runner.fps)
+    assert len(result.by_parameter) == 6 and all(result.by_parameter.values())
+    assert result.drag.fall.shape == (len(runner.dataset.test),)
+
+
+def test_the_tracker_error_reads_back_its_cache_file_and_gives_the_calibrated_observation():
+    err = TrackerError(noise_px=1.08, noise_m=0.01495, drop=0.02, n_frames=120, metres_per_pixel=0.0138)
+    assert TrackerError.from_json(json.loads(json.dumps(err.to_json()))) == err
+    assert err.observation() == observe.Observation(noise=0.01495, drop=0.02)
+    old = {"noise_px": 1.08, "noise_m": 0.01495, "drop": 0.0, "n_frames": 120, "metres_per_pixel": 0.0138}
+    assert TrackerError.from_json(old).drop == 0.0, "the calibration files of earlier builds hold the same fields"

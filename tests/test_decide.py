@@ -1,12 +1,15 @@
-"""The decision functions: operating point, rates, curves, calibration, time to clear; and bad inputs."""
+"""The decision functions (operating point, rates, curves, calibration, time to clear; bad inputs) and the chapter
+*From accuracy to a decision* assembled from its steps on arrays and stand-in models (nothing trains)."""
 
 import math
 
 import numpy as np
 import pytest
 
+from study.book import results
 from study.core.errors import ConfigError
-from study.experiments import decide
+from study.experiments import Runner, decide, motion, paper
+from study.experiments.tracker import TrackerError
 
 
 @pytest.fixture
@@ -24,8 +27,8 @@ def test_the_threshold_meets_the_target_miss_rate(scores):
         misses = np.mean(p[y == 1] < t)
         assert misses <= target and misses > target - 2 / 5000  # as high as the target allows
     r = decide.rates(p, y, decide.threshold_for_miss_rate(p, y, 0.01))
-    assert r["miss"].value <= 0.01 and r["miss"].lo <= r["miss"].value <= r["miss"].hi
-    assert 0 < r["false_alarm"].value < 1  # the price of a low miss rate
+    assert r.miss.value <= 0.01 and r.miss.lo <= r.miss.value <= r.miss.hi
+    assert 0 < r.false_alarm.value < 1  # the price of a low miss rate
 
 
 @pytest.mark.parametrize("target", [0, 1, -0.1, 1.5, float("nan"), "1%"])
@@ -132,7 +135,7 @@ def test_the_certified_threshold_refuses_a_small_set_and_handles_ties(scores):
 
 
 def test_the_certified_threshold_holds_on_data_it_has_not_seen():
-    """Heavy scores from Beta(5, 2), whose CDF is the true miss rate of any threshold: over 1000 calibration
+    """Heavy scores from Beta(5, 2), whose CDF is the true miss rate of any threshold: over 1000 certification
     sets of 500 heavy throws, the certified threshold's true miss rate is within 5 % in at least 95 % of them
     (the plain empirical quantile: in about half)."""
     from scipy import stats
@@ -151,7 +154,7 @@ def test_the_certified_threshold_holds_on_data_it_has_not_seen():
 
 @pytest.mark.parametrize("frames", ["independent", "monotone", "correlated"])
 def test_certified_clearing_thresholds_hold_on_data_they_have_not_seen(frames):
-    """The share of heavy objects ever cleared, over 200 calibration sets of 500 heavy throws and 8 frames, is
+    """The share of heavy objects ever cleared, over 200 certification sets of 500 heavy throws and 8 frames, is
     within 5 % in at least 95 % of them. Independent frames (heavy scores Beta(a_t, 2)) and monotone ones
     (u^c_t of one uniform u) give the true rate exactly; correlated ones (a random walk of logits) on a fresh
     draw of 20000 heavy throws."""
@@ -186,22 +189,168 @@ def test_certified_clearing_thresholds_hold_on_data_they_have_not_seen(frames):
 def test_what_the_decision_chapter_reads_off_a_split(scores):
     assert decide.heavy_needed(0.01) == 299 and decide.heavy_needed(0.05) == 59
     p, y = scores
-    half = np.arange(len(y)) % 2 == 0  # calibration and test splits, both classes in each
+    half = np.arange(len(y)) % 2 == 0  # certification and test splits, both classes in each
     op = decide.operating_point(p[half], y[half], p[~half], y[~half], 0.01)
-    assert op["certified"] == decide.certified_threshold(p[half], y[half], 0.01) < op["empirical"]
-    assert op["miss"].value <= op["miss_empirical"].value
-    assert op["false_alarm"].value >= op["false_alarm_empirical"].value
+    assert op.certified == decide.certified_threshold(p[half], y[half], 0.01) < op.empirical
+    assert op.miss.value <= op.miss_empirical.value
+    assert op.false_alarm.value >= op.false_alarm_empirical.value
     few = np.r_[np.zeros(10, int), np.ones(100, int)]
     none = decide.operating_point(np.linspace(0, 1, 110), few, p, y, 0.01)
-    assert none["certified"] is None and none["miss"] is None and none["miss_empirical"] is not None
+    assert none.certified is None and none.miss is None and none.miss_empirical is not None
     rng = np.random.default_rng(4)
     n, T = 2000, 10
     yy = np.repeat([0, 1], n // 2)
     drift = np.linspace(0, 2, T)[None, :] * np.where(yy == 1, 1, -1)[:, None]
-    f_cal, f_test = (1 / (1 + np.exp(-(drift + rng.standard_normal((n, T))))) for _ in range(2))
-    c = decide.clearing(f_cal, yy, f_test, yy, 0.05)
-    assert c["thresholds"].shape == (T,) and c["cleared"].shape == (n // 2,)
-    assert c["share_cleared"].value == c["cleared"].mean() and len(c["times"]) == c["cleared"].sum()
-    assert (c["times"] >= 0).all() and c["miss"].value < 0.1
-    assert decide.clearing(f_cal[:300], yy[:300] * 0 + 1, f_test, yy, 0.01)["thresholds"] is not None
-    assert decide.clearing(f_cal[:200], np.ones(200, int), f_test, yy, 0.01)["thresholds"] is None
+    f_cert, f_test = (1 / (1 + np.exp(-(drift + rng.standard_normal((n, T))))) for _ in range(2))
+    c = decide.clearing(f_cert, yy, f_test, yy, 0.05)
+    assert c.thresholds.shape == (T,) and c.cleared.shape == (n // 2,)
+    assert c.share_cleared.value == c.cleared.mean() and len(c.times) == c.cleared.sum()
+    assert (c.times >= 0).all() and c.miss.value < 0.1
+    assert decide.clearing(f_cert[:300], yy[:300] * 0 + 1, f_test, yy, 0.01) is not None
+    assert decide.clearing(f_cert[:200], np.ones(200, int), f_test, yy, 0.01) is None
+
+
+# ---------------------------------------------------------------------------------------------
+# The chapter, assembled from its steps on arrays and stand-in models
+
+
+class Scored:
+    """Stands in for a trained model: p(heavy) is a logistic of the throw's first z (its latent score) times
+    ``gain``, so each seed can be sharper or blunter."""
+
+    def __init__(self, gain: float) -> None:
+        self.gain = gain
+
+    def predict_proba(self, x):
+        p = 1 / (1 + np.exp(-self.gain * x[:, 0, 2]))
+        return np.stack([1 - p, p], axis=1)
+
+
+def _inputs(rng, y, T):
+    """(n, T, 3) whose first z is a latent score: above 0 for most heavy throws, below for most light ones."""
+    x = np.zeros((len(y), T, 3))
+    x[:, 0, 2] = np.where(y == 1, 1.5, -1.5) + rng.standard_normal(len(y))
+    return x
+
+
+def _frames(rng, y, S, T):
+    """(S, n, T) p(heavy) after every frame: evidence that grows with the frames around each throw's own latent
+    offset (frames of one throw are correlated, as a network's answers are)."""
+    drift = np.linspace(0.5, 5, T)[None, None, :] * np.where(y == 1, 1, -1)[None, :, None]
+    offset = rng.standard_normal((1, len(y), 1))
+    return 1 / (1 + np.exp(-(drift + offset + 0.1 * rng.standard_normal((S, len(y), T)))))
+
+
+def _chapter(n_cert_per_class: int, unstable: bool = False) -> decide.CarDecision:
+    rng = np.random.default_rng(1)
+    T, fps, seeds = 12, 10.0, (0, 1)
+    y_test, y_cert = np.repeat([0, 1], 300), np.repeat([0, 1], n_cert_per_class)
+    x_test, x_cert = _inputs(rng, y_test, T + 2), _inputs(rng, y_cert, T + 2)
+    sp = decide.Splits(T, fps, x_test, y_test, x_cert, y_cert, x_test[:, :T] * 0.9, x_cert[:, :T] * 0.9)
+    camera = decide.CameraChoice({"positions": 0.7, "velocity": 0.8}, "velocity", decide.TrainConfig(loss_at="every"))
+    observed_test = _frames(rng, y_test, 2, T)
+    if unstable:  # seed 1 learnt nothing on the test throws: it calls every one heavy, and clears none
+        observed_test[1] = 0.99
+    nets = {"exact": decide.EveryFrame("the paper's network, exact positions", camera.config,
+                                       _frames(rng, y_test, 2, T), _frames(rng, y_cert, 2, T)),
+            "observed": decide.EveryFrame("the velocity network under the calibrated tracker", camera.config,
+                                          observed_test, _frames(rng, y_cert, 2, T))}
+    models = [Scored(1.0), Scored(3.0)]
+    conditions = {
+        "exact": decide.condition("Table 1's, exact", models, x_cert, y_cert, x_test, y_test, 0.01),
+        "observed": decide.condition("Table 1's, observed", models, sp.observed_certify, y_cert, sp.observed_test,
+                                     y_test, 0.01),
+        "randomised": decide.condition("trained on random observations, observed", models, sp.observed_certify,
+                                       y_cert, sp.observed_test, y_test, 0.01),
+        "camera": decide.condition("the camera's network (velocity), observed", models[::-1], sp.observed_certify,
+                                   y_cert, sp.observed_test, y_test, 0.01),
+    }
+    return decide.assemble(sp, camera, nets, conditions, seeds, 0.01)
+
+
+@pytest.fixture(scope="module")
+def certified():
+    return _chapter(1000)  # 1000 heavy throws: a 1 % miss rate can be certified with a few misses
+
+
+def test_a_certifiable_chapter_reports_its_operating_points_under_their_names(certified, tmp_path):
+    n = certified.numbers
+    names = {name for name, _ in n.entries()}
+    assert {"decision.exact.miss", "decision.exact.false_alarm", "decision.clear.observed.share_by_end",
+            "decision.clear.exact.seed0.share", "decision.clear.exact.seed1.miss", "decision.clear.exact.median_s",
+            "decision.choice.val.velocity", "decision.camera.ece_scaled", "decision.certified.points"} <= names
+    assert not any(name.endswith(".certifiable") for name in names)
+    point = certified.conditions["exact"].per_seed[0].point
+    assert point.certified is not None and n.conditions["exact"].miss.value == point.miss.value <= 0.05
+    assert n.conditions["exact"].miss.what == "heavy called light at the certified 1% point, Table 1's, exact, seed 0"
+    assert n.clear["exact"].median_s.unit == "s" and 0 < n.clear["exact"].median_s.value <= 1.2
+    assert n.certified.points.value == 8 == len(certified.certified_points), "4 classifiers x 2 seeds"
+    assert n.clear["observed"].share_by_end.source["stable"] is True
+    f = tmp_path / "results.json"
+    f.write_text(results.dumps(n.entries()))
+    assert decide.Numbers.read(results.load(f)) == n, "the summary reads the tree back"
+
+
+def test_a_certifiable_chapter_says_what_a_car_would_do(certified):
+    c = certified
+    assert c.answer.startswith("At the threshold certified for a 1 % miss rate") and "within 1.2 s" in c.answer
+    assert c.cert_check.startswith("Of the 8 certified points")
+    assert c.stable_words.startswith("Every seed's share") and "not certifiable" not in c.clear_table.markdown()
+    assert c.best == "velocity" and c.val_words == "70.0 % (positions) against 80.0 % (velocity)"
+    assert c.n_needed == 299 and c.n_certify_heavy == 1000 and c.target == "1 %" and c.heavy_share == "50.0 %"
+    assert float(c.acc_end.rstrip(" %")) > float(c.acc_1s.rstrip(" %")) - 1e-9 > 50  # the evidence grows
+    rows = c.decision_table.rows
+    assert len(rows) == 4 and all(r["thr"] != "not certifiable" and " → " in r["ece"] for r in rows)
+    for cond in c.conditions.values():  # temperature scaling fitted on the certification split helps here
+        assert cond.ece_scaled <= cond.ece + 0.02
+
+
+def test_seeds_that_split_are_said_to_split():
+    c = _chapter(1000, unstable=True)
+    assert not c.networks["observed"].stable and c.networks["exact"].stable
+    assert c.stable_words.startswith("For the velocity network under the calibrated tracker some seeds' shares")
+    assert "**no**: the seeds split" in c.clear_table.markdown()
+
+
+def test_too_few_heavy_throws_certify_nothing_and_the_chapter_says_so(tmp_path):
+    c = _chapter(40)
+    n = c.numbers
+    assert n.conditions["exact"].miss is None and n.conditions["exact"].false_alarm is None
+    assert n.clear["exact"].certifiable.value == 0 and n.clear["exact"].certifiable.unit == "count"
+    assert n.clear["observed"].share_by_end is None and n.clear["observed"].per_seed == {}
+    assert n.certified.points.value == 0 and n.conditions["camera"].miss_empirical is not None
+    assert c.answer.startswith("With 40 heavy throws the certification split is too small")
+    assert c.cert_check == "No operating point could be certified on this certification split."
+    assert "not certifiable" in c.clear_table.markdown() and c.decision_table.rows[0]["thr"] == "not certifiable"
+    f = tmp_path / "results.json"
+    f.write_text(results.dumps(n.entries()))
+    assert decide.Numbers.read(results.load(f)) == n
+
+
+def test_the_camera_network_is_chosen_on_observed_validation_and_the_splits_are_their_own(tmp_path, monkeypatch):
+    from fake_runs import cache_records
+
+    runner = Runner.open("smoke", data_dir=tmp_path)
+    p = runner.preset
+    error = TrackerError(1.1, 0.015, 0.05, 100, 0.0138)
+    monkeypatch.setattr(Runner, "tracker_error", lambda self: error)
+    for inputs in ("positions", "velocity"):
+        cache_records(runner, paper.grid_configs(p, "peephole", inputs), test=False)
+    column = next(c for c in motion.columns(error) if c.air and c.name == "calibrated")
+    observed = {k: motion.trained_config(runner.table1_config(k), column) for k in ("positions", "velocity")}
+    for k, cfg in observed.items():
+        val = 0.8 if k == "positions" else 0.6
+        cache_records(runner, paper.seed_configs(cfg, p.grid_seeds, ("z",)), val_score=lambda c, v=val: v)
+    camera = decide.camera_network(runner)
+    assert camera.best == "positions" and camera.val == pytest.approx({"positions": 0.8, "velocity": 0.6})
+    assert camera.config.loss_at == "every" and camera.config.observe == "fixed"
+    assert camera.config.observe_noise == 0.015
+    assert camera.config.inputs == "positions" and camera.config.observe_drop == 0.05
+    sp = decide.splits(runner)
+    T = runner.table1_config().n_frames(runner.fps)
+    assert sp.certify_x.shape == (2 * p.certify_per_class, T + 2, 3)
+    assert (sp.certify_y == 1).sum() == p.certify_per_class
+    assert sp.observed_test.shape == (len(runner.dataset.test.y), T, 3) and sp.observed_certify.shape[1] == T
+    assert not np.allclose(sp.observed_test, runner.dataset.test.x[:, :T]), "observed with the tracker's error"
+    assert not np.array_equal(sp.observed_test, runner.observed("test", error.observation(), T)), "its own draw"
+    np.testing.assert_array_equal(decide.splits(runner).observed_certify, sp.observed_certify)

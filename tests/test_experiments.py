@@ -11,10 +11,11 @@ import pytest
 from study import experiments
 from study.core import presets
 from study.core.errors import ConfigError
-from study.experiments import paper, runs, stats
+from study.experiments import paper, runs, stats, text
 from study.experiments.runner import Runner
+from study.experiments.runtable import Run, Runs
 from study.learn import train
-from study.learn.metrics import Interval
+from study.learn.metrics import Interval, bootstrap_accuracy
 
 TINY = experiments.Preset(
     name="tiny", length=0.5, lrs=(1e-2,), truncations=(5, 15), dropouts=(0.2,), batch_sizes=(8,),
@@ -39,18 +40,19 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
     one_cell = dataclasses.replace(TINY, cells=("peephole",))
     r = runner(ds, one_cell, tmp_path)
     grid = r.grid("peephole")
-    assert [(g["truncation"], g["seed"]) for g in grid] == [(5, 0), (5, 1), (15, 0), (15, 1)]
-    assert all("accuracy" not in g for g in grid), "the grid never scores the test split"
+    assert [(g.config.truncation, g.seed) for g in grid] == [(5, 0), (5, 1), (15, 0), (15, 1)]
+    assert all(g.accuracy is None and g.correct is None for g in grid), "the grid never scores the test split"
     points = paper.grid_points(grid)
-    assert [(g["truncation"], g["n"]) for g in points] == [(5, 2), (15, 2)]
+    assert [(g.config.truncation, g.n) for g in points] == [(5, 2), (15, 2)]
     cfg = r.table1_config()
-    best = max(points, key=lambda g: g["val_mean"])
-    assert cfg.dims == "z" and cfg.truncation == best["truncation"] and cfg.max_epochs == 1, "chosen by the mean"
+    best = max(points, key=lambda g: g.val_mean)
+    assert cfg.dims == "z" and cfg.truncation == best.config.truncation and cfg.max_epochs == 1, "chosen by the mean"
     seeds = r.seed_runs(cfg)
-    assert [(g["dims"], g["seed"]) for g in seeds] == [("z", 0), ("z", 1), ("xyz", 0), ("xyz", 1)]
-    assert all(0 <= g["accuracy"] <= 1 and g["correct"].shape == (16,) for g in seeds)
+    assert [(g.get("dims"), g.seed) for g in seeds] == [("z", 0), ("z", 1), ("xyz", 0), ("xyz", 1)]
+    assert all(0 <= g.accuracy <= 1 and g.correct.shape == (16,) for g in seeds)
+    assert seeds.where(dims="z").correct().shape == (2, 16) and len(seeds.groups("dims")) == 2
     lengths = r.length_sweep(cfg)
-    assert [(g["dims"], g["length"], g["frames"]) for g in lengths] == [
+    assert [(g.get("dims"), g.get("length"), g.get("frames")) for g in lengths] == [
         ("z", 0.3, 9), ("z", 0.5, 15), ("xyz", 0.3, 9), ("xyz", 0.5, 15)]
     n_trained = len(list((tmp_path / "models").iterdir()))
     assert r.plan.n_models == n_trained, "the plan counts every distinct model the runner was asked for"
@@ -58,7 +60,7 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
     again.trained(cfg)
     assert again.plan.n_models == 1, "a model loaded from the cache is in the plan as one trained afresh"
     long = r.long_memory(cfg)
-    assert [(g["dims"], g["length"], g["truncation"]) for g in long] == [("z", 0.5, 15), ("xyz", 0.5, 15)], \
+    assert [(g.get("dims"), g.get("length"), g.get("truncation")) for g in long] == [("z", 0.5, 15), ("xyz", 0.5, 15)], \
         "the long-memory variant back-propagates through every frame of the input"
     configs = [json.loads(f.read_text())["config"] for f in (tmp_path / "runs").glob("*.json")]
     assert sum(c["forget_init"] == "chrono" for c in configs) == 2, "with chrono-initialised forget gates"
@@ -68,9 +70,9 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
 
     monkeypatch.setattr(train, "fit", no_training)
     again = r.seed_runs(cfg)
-    assert [{k: v for k, v in g.items() if k != "correct"} for g in again] == \
-        [{k: v for k, v in g.items() if k != "correct"} for g in seeds]
-    assert r.grid("peephole") == grid
+    strip = lambda rs: [{k: v for k, v in vars(g).items() if k != "correct"} for g in rs]  # noqa: E731
+    assert strip(again) == strip(seeds) and all((a.correct == b.correct).all() for a, b in zip(again, seeds))
+    assert strip(r.grid("peephole")) == strip(grid)
     assert not list((tmp_path / "runs").glob(".*tmp"))
 
 
@@ -90,13 +92,18 @@ def test_the_plan_counts_distinct_models_and_sums_their_training_time(tmp_path, 
     assert runs.plan_totals([tmp_path / "plan.jsonl", tmp_path / "absent.jsonl"]) == {"models": 5.0, "train_seconds": 2.5}
 
 
+def _run(cfg: train.TrainConfig, val_accuracy: float = 0.7, accuracy: float | None = None, **kw) -> Run:
+    return Run(cfg, val_accuracy, 0.5, 40, 30, 1.0, failed=False, accuracy=accuracy, **kw)
+
+
 def test_grid_is_chosen_by_the_mean_over_seeds_not_one_lucky_run():
-    rows = [{"cell": "peephole", "inputs": "positions", "lr": lr, "truncation": 30, "dropout": 0.2, "batch_size": 32, "seed": s,
-             "val_accuracy": acc, "val_loss": 0.5, "failed": False, "diverged_epoch": None, "epochs": 40}
-            for lr, accs in ((1e-3, (0.80, 0.80, 0.80)), (3e-3, (0.95, 0.55, 0.56))) for s, acc in enumerate(accs)]
+    base = train.TrainConfig(truncation=30)
+    rows = Runs(_run(dataclasses.replace(base, lr=lr, seed=s), acc)
+                for lr, accs in ((1e-3, (0.80, 0.80, 0.80)), (3e-3, (0.95, 0.55, 0.56))) for s, acc in enumerate(accs))
     assert paper.best_config(rows, TINY).lr == 1e-3  # 3e-3 has the best single run, 1e-3 the best mean
-    points = {r["lr"]: r for r in paper.grid_points(rows)}
-    assert points[3e-3]["val_std"] == pytest.approx(np.std([0.95, 0.55, 0.56], ddof=1))
+    points = {r.config.lr: r for r in paper.grid_points(rows)}
+    assert points[3e-3].val_std == pytest.approx(np.std([0.95, 0.55, 0.56], ddof=1))
+    assert points[1e-3].same_point(dataclasses.replace(base, lr=1e-3, seed=7, dims="xyz")), "the seed is no point"
 
 
 @pytest.mark.slow
@@ -140,24 +147,48 @@ def test_ablation_and_baseline(tmp_path, ds):
     winners = {c: dataclasses.replace(cfg, lr=lr) for c, lr in zip(TINY.cells, (1e-2, 3e-3, 1e-3))}
     r = runner(ds, dataclasses.replace(TINY, seeds=(0,)), tmp_path)
     rows = r.ablation(winners)
-    assert [g["cell"] for g in rows] == ["peephole", "no-peephole", "gru"]
+    assert rows.values("cell") == ["peephole", "no-peephole", "gru"]
     recs = {json.loads(f.read_text())["config"]["cell"]: json.loads(f.read_text())["config"]["lr"]
             for f in (tmp_path / "runs").glob("*.json")}
     assert recs == {"peephole": 1e-2, "no-peephole": 3e-3, "gru": 1e-3}, "each cell at its own winner"
     base = r.baseline_runs()
-    assert [g["dims"] for g in base] == ["z", "xyz"] and all(0 <= g["accuracy"] <= 1 for g in base)
+    assert list(base) == ["z", "xyz"] and all(0 <= b.accuracy <= 1 and b.correct.shape == (16,) for b in base.values())
 
 
-def test_summarise():
-    rows = [{"dims": "z", "accuracy": a, "failed": a < 0.6} for a in (0.5, 0.8, 0.9)] + [{"dims": "xyz", "accuracy": 0.5}]
-    s = {r["dims"]: r for r in stats.summarise(rows, ("dims",))}
-    assert s["z"]["n"] == 3 and s["z"]["mean"] == pytest.approx(2.2 / 3) and s["z"]["best"] == 0.9
-    assert s["z"]["std"] == pytest.approx(np.std([0.5, 0.8, 0.9], ddof=1)) and s["xyz"]["std"] == 0.0
-    assert s["z"]["failed"] == 1 and "interval" not in s["z"]  # no per-trajectory scores: no interval
+def test_summarise_and_the_run_table():
+    z, xyz = train.TrainConfig(dims="z"), train.TrainConfig(dims="xyz")
+    rows = Runs([Run(dataclasses.replace(z, seed=k), 0.7, 0.5, 40, 30, 1.0, failed=a < 0.6, accuracy=a)
+                 for k, a in enumerate((0.5, 0.8, 0.9))] + [_run(xyz, accuracy=0.5)])
+    s = {r.keys["dims"]: r for r in stats.summarise(rows, ("dims",))}
+    assert s["z"].n == 3 and s["z"].mean == pytest.approx(2.2 / 3) and s["z"].max == 0.9
+    assert s["z"].std == pytest.approx(np.std([0.5, 0.8, 0.9], ddof=1)) and s["xyz"].std == 0.0
+    assert s["z"].failed == 1 and s["z"].interval is None  # no per-trajectory scores: no interval
+    assert rows.where(dims="z").seeds == [0, 1, 2] and rows.where(dims="z", seed=1).one().accuracy == 0.8
+    with pytest.raises(ConfigError, match="validation only"):
+        rows.correct()
+    with pytest.raises(ConfigError, match="neither a label"):
+        rows[0].get("colour")
     rng = np.random.default_rng(0)
-    scored = [{"dims": "z", "accuracy": c.mean(), "correct": c} for c in (rng.random(100) < 0.8 for _ in range(3))]
-    iv = stats.summarise(scored, ("dims",))[0]["interval"]
+    scored = Runs(_run(dataclasses.replace(z, seed=k), accuracy=c.mean(), correct=c)
+                  for k, c in enumerate(rng.random(100) < 0.8 for _ in range(3)))
+    iv = stats.summary(scored).interval
     assert iv.lo < iv.value < iv.hi and "3 seeds" in iv.method
+
+
+def test_the_run_validation_picks_is_one_statistic_over_one_data_set_or_several():
+    rng = np.random.default_rng(1)
+    z = train.TrainConfig(dims="z")
+
+    def data_set(vals):  # seed 1 validates best; seed 0 is best on the test split
+        return Runs(_run(dataclasses.replace(z, seed=k), v, accuracy=c.mean(), correct=c)
+                    for k, (v, c) in enumerate(zip(vals, (rng.random(200) < p for p in (0.9, 0.7, 0.6)))))
+
+    one = stats.validation_pick([data_set((0.6, 0.8, 0.7))])
+    assert [r.seed for r in one.picked] == [1]
+    assert one.interval == bootstrap_accuracy(one.picked[0].correct), "over one data set: the run's own bootstrap"
+    three = stats.validation_pick([data_set((0.6, 0.8, 0.7)) for _ in range(3)])
+    assert [r.seed for r in three.picked] == [1, 1, 1] and "hierarchical" in three.interval.method
+    assert three.interval.value == pytest.approx(np.mean([r.accuracy for r in three.picked]))
 
 
 def test_presets():
@@ -174,20 +205,19 @@ def test_presets():
 
 def test_long_input_effect():
     def row(L, m, half=0.01):
-        return {"dims": "z", "length": L, "mean": m, "interval": Interval(m, m - half, m + half, "x")}
+        return stats.Summary({"dims": "z", "length": L}, 2, m, 0.0, m, m, 0, 0, 0, Interval(m, m - half, m + half, "x"))
 
     e = stats.long_input_effect([row(1, 0.7), row(2, 0.8), row(4, 0.7)], "z")
-    assert e["best_length"] == 2 and e["last_length"] == 4 and e["hurts"]
-    assert not stats.long_input_effect([row(1, 0.7), row(2, 0.8), row(4, 0.79)], "z")["hurts"]  # overlap
-    assert not stats.long_input_effect([row(L, 0.6 + 0.05 * L) for L in (1, 2, 4)], "z")["hurts"]
+    assert e.best_length == 2 and e.last_length == 4 and e.hurts
+    assert not stats.long_input_effect([row(1, 0.7), row(2, 0.8), row(4, 0.79)], "z").hurts  # overlap
+    assert not stats.long_input_effect([row(L, 0.6 + 0.05 * L) for L in (1, 2, 4)], "z").hurts
 
 
 def test_markdown_table():
-    from study.book import tables
-
-    md = tables.markdown([{"a": 0.8123, "b": "x"}], {"a": "acc", "b": "name"}, {"a": tables.pct})
+    md = text.markdown([{"a": 0.8123, "b": "x"}], {"a": "acc", "b": "name"}, {"a": text.pct})
     assert md.splitlines() == ["| acc | name |", "|---|---|", "| 81.2 % | x |"]
-    assert tables.pct_pm(0.8, 0.0123) == "80.0 ± 1.2 %"
+    assert text.Table([{"a": 0.8123, "b": "x"}], {"a": "acc", "b": "name"}, {"a": text.pct}).markdown() == md
+    assert text.pct_pm(0.8, 0.0123) == "80.0 ± 1.2 %"
 
 
 @pytest.mark.slow
@@ -195,9 +225,9 @@ def test_parallel_runs_equal_sequential_runs(tmp_path, ds):
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     seq = runner(ds, TINY, tmp_path / "a", workers=1).seed_runs(cfg)
     par = runner(ds, TINY, tmp_path / "b", workers=2).seed_runs(cfg)
-    strip = lambda rows: [{k: v for k, v in r.items() if k not in ("seconds", "correct")} for r in rows]  # noqa: E731
+    strip = lambda rows: [{k: v for k, v in vars(r).items() if k not in ("seconds", "correct")} for r in rows]  # noqa: E731
     assert strip(par) == strip(seq)
-    assert all((a["correct"] == b["correct"]).all() for a, b in zip(par, seq))
+    assert all((a.correct == b.correct).all() for a, b in zip(par, seq))
     for f in (tmp_path / "a" / "runs").glob("*.json"):
         a, b = json.loads(f.read_text()), json.loads((tmp_path / "b" / "runs" / f.name).read_text())
         a.pop("train_seconds"), b.pop("train_seconds")
@@ -212,7 +242,7 @@ def test_a_dask_cluster_trains_the_same_records_as_the_local_pool(tmp_path, smok
     cfg = smoke.base_config()
     pool = runner(smoke_dataset, smoke, tmp_path / "pool", workers=2).seed_runs(cfg)
     dask = runner(smoke_dataset, smoke, tmp_path / "dask", workers=2, scheduler="local").seed_runs(cfg)
-    assert [r["accuracy"] for r in dask] == [r["accuracy"] for r in pool]
+    assert dask.values("accuracy") == pool.values("accuracy")
     names = sorted(f.name for f in (tmp_path / "pool" / "runs").glob("*.json"))
     assert names and names == sorted(f.name for f in (tmp_path / "dask" / "runs").glob("*.json"))
     for name in names:
@@ -242,9 +272,10 @@ def test_the_recommended_model_is_the_best_candidate_on_observed_validation_thro
     cands = r.candidates({"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}, ob)
     assert list(cands) == ["positions, exact", "positions, randomised", "velocity, exact", "velocity, randomised"]
     assert cands["velocity, randomised"].observe == "randomised" and cands["velocity, randomised"].observe_noise == 0.01
-    choice, val, models = r.recommended(cands, ob=ob)
+    rec = r.recommended(cands, ob=ob)
+    choice, val, models = rec.choice, rec.val, rec.models
     assert set(val) == set(models) == set(cands) and choice == max(val, key=lambda k: val[k].value)
-    assert models[choice].config == dataclasses.replace(cands[choice], seed=0)
+    assert rec.model is models[choice] and models[choice].config == dataclasses.replace(cands[choice], seed=0)
     assert r.plan.n_models == 4 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
 
 

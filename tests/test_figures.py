@@ -19,12 +19,15 @@ def test_the_class_colours_are_colour_blind_safe_and_start_the_cycle() -> None:
 
 
 def test_accuracy_vs_length_draws_both_inputs_with_failed_runs_marked() -> None:
+    from study.experiments.runtable import Run, Runs
+    from study.experiments.stats import Summary
+    from study.learn.config import TrainConfig
     from study.learn.metrics import Interval
 
-    summary = [{"dims": d, "length": L, "mean": 0.7, "interval": Interval(0.7, 0.65, 0.75, "x")}
+    summary = [Summary({"dims": d, "length": L}, 2, 0.7, 0.0, 0.7, 0.7, 1, 0, 0, Interval(0.7, 0.65, 0.75, "x"))
                for d in ("xyz", "z") for L in (1.0, 2.0)]
-    rows = [{"dims": d, "length": L, "accuracy": a, "failed": a < 0.55}
-            for d in ("xyz", "z") for L in (1.0, 2.0) for a in (0.5, 0.72)]
+    rows = Runs(Run(TrainConfig(dims=d, length=L), 0.7, 0.4, 3, 1, 1.0, a < 0.55, accuracy=a)
+                for d in ("xyz", "z") for L in (1.0, 2.0) for a in (0.5, 0.72))
     fig = figures.accuracy_vs_length(summary, rows)
     assert [ax.get_title() for ax in fig.axes] == ["X, Y, Z", "Z only"]
     labels = fig.axes[0].get_legend_handles_labels()[1]

@@ -1,5 +1,6 @@
-"""The pieces of the chapters on what the motion allows and on another engine: the camera columns, the
-learners' configs, the best-learner rule, the engines' throw-by-throw agreement, the seeds' agreement."""
+"""The chapter *What the motion allows*: its pieces (the camera columns, the learners' configs, the best-learner
+rule, the ceiling) on arrays, and its computation on fake run records, models and MiniRocket fits written into a
+fresh cache (nothing trains)."""
 
 from __future__ import annotations
 
@@ -8,13 +9,18 @@ import math
 import numpy as np
 import pytest
 
-from study.book import tables
-from study.experiments import engines, motion, stats
+from fake_runs import cache_models, cache_records, cache_rocket
+from study.book import results
+from study.experiments import Runner, motion, paper, stats
+from study.experiments.text import pct, pct_ci, seeds_ci
+from study.experiments.tracker import TrackerError
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
-from study.simulate import measure
+from study.simulate import synth
 
-CAL = {"noise_px": 1.02, "noise_m": 0.0141, "drop": 0.05, "n_frames": 100, "metres_per_pixel": 0.0138}
+pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
+
+CAL = TrackerError(noise_px=1.02, noise_m=0.0141, drop=0.05, n_frames=100, metres_per_pixel=0.0138)
 
 
 def test_the_columns_come_from_the_camera_model():
@@ -24,56 +30,46 @@ def test_the_columns_come_from_the_camera_model():
     far = next(c for c in cols if c.name == "far")
     one_px = lambda d: 2 * d * math.tan(math.radians(22.5)) / 1080  # noqa: E731
     assert near.noise == pytest.approx(one_px(4.0)) and far.noise == pytest.approx(one_px(55.0))
-    assert next(c for c in cols if c.name == "calibrated").noise == CAL["noise_m"]
-    assert all(c.drop == (0.0 if c.noise is None else CAL["drop"]) for c in cols), "lost frames in every observed one"
+    assert next(c for c in cols if c.name == "calibrated").noise == CAL.noise_m
+    assert all(c.drop == (0.0 if c.noise is None else CAL.drop) for c in cols), "lost frames in every observed one"
     assert "3.1 mm" in near.label and "42.2 mm" in far.label and "1.02 px" in cols[2].label
+    assert [c.key for c in cols[3:5]] == ["air_on.far", "air_off.exact"] and cols[6].heading == "air off, tracker"
 
 
 def test_each_network_trains_on_the_condition_it_is_tested_on():
-    base = {n: TrainConfig(dims="xyz") for n in motion.NETWORKS + ("lstm_exact_trained",)}
+    base = {n: TrainConfig(dims="xyz") for n in motion.NETWORKS + ("peephole_exact_trained",)}
     exact, observed = motion.columns(CAL)[0], motion.columns(CAL)[2]
     assert set(motion.network_configs(base, exact)) == set(motion.NETWORKS), "no exact-trained row where all are exact"
     cfgs = motion.network_configs(base, observed)
-    assert cfgs["lstm_positions"].observe == "fixed" and cfgs["lstm_positions"].observe_noise == CAL["noise_m"]
-    assert cfgs["lstm_positions"].observe_drop == CAL["drop"] and cfgs["lstm_positions"].dims == "z"
-    assert cfgs["lstm_exact_trained"].observe == "exact"
+    assert cfgs["peephole_positions"].observe == "fixed" and cfgs["peephole_positions"].observe_noise == CAL.noise_m
+    assert cfgs["peephole_positions"].observe_drop == CAL.drop and cfgs["peephole_positions"].dims == "z"
+    assert cfgs["peephole_exact_trained"].observe == "exact"
     plan = motion.plan({True: "on", False: "off"}, base, motion.columns(CAL), (0, 1, 2))
     assert [r for r, _, _ in plan] == ["on"] * 4 + ["off"] * 4 and all(test for _, _, test in plan)
     assert sum(len(c) for _, c, _ in plan) == 3 * (2 * 3 + 6 * 4), "3 seeds: 3 nets per exact column, 4 observed"
+
+
+def test_the_learners_are_the_peephole_lstm_by_name_never_lstm():
+    assert not any(n.startswith("lstm") for n in motion.LEARNERS)
+    assert set(motion.NAMES) == set(motion.LEARNERS) and "peephole_exact_trained" not in motion.SHOWN
 
 
 def test_the_best_learner_is_tied_when_the_paired_difference_spans_zero():
     rng = np.random.default_rng(0)
     truth = rng.random((3, 2000)) < 0.8
     col = motion.columns(CAL)[0]
-    same = [motion.Cell("a", col, truth), motion.Cell("b", col, truth.copy())]
-    assert motion.best_of(same)["tied"]
+    same = [motion.Entry("physics", col, truth), motion.Entry("rule", col, truth.copy())]
+    assert motion.best_of(same).tied
     worse = truth & (rng.random((3, 2000)) < 0.8)
-    clear = motion.best_of([motion.Cell("weak", col, worse), motion.Cell("strong", col, truth)])
-    assert clear["best"] == "strong" and not clear["tied"] and clear["difference"].lo > 0
+    clear = motion.best_of([motion.Entry("physics", col, worse), motion.Entry("minirocket", col, truth)])
+    assert clear.best == "minirocket" and clear.next == "physics"
+    assert not clear.tied and clear.difference.lo > 0
 
 
 def test_the_ceiling_of_a_column_knows_the_mass_only_with_air():
-    from study.simulate import synth
-
     cfg = synth.SynthConfig.preset("paper")
     on, off = motion.columns(CAL)[0], motion.columns(CAL)[4]
     assert motion.column_ceiling(cfg, on) == 1.0 and 0.5 < motion.column_ceiling(cfg, off) < 1.0
-
-
-def test_engine_agreement_is_throw_by_throw():
-    t = np.arange(90) / 30.0
-    z = 0.1 + np.abs(np.sin(2 * t)) * np.exp(-t)  # a few decaying hops
-    a = np.zeros((2, 90, 3))
-    a[..., 2] = z
-    b = a.copy()
-    b[1, :, 0] = np.linspace(0, 1.5, 90)  # the second throw travels 1.5 m further in the other engine
-    d = engines.agreement(a, b, 30.0, rest_height=0.1)
-    assert set(d) == set(engines.AGREEMENT)
-    assert d["bounces"].tolist() == [0, 0] and d["first_rebound"].tolist() == [0, 0]
-    assert d["distance"][0] == 0 and d["distance"][1] == pytest.approx(1.5)
-    apex = int(measure.bounces(z).apexes[0])
-    assert engines.first_rebound(a[:1, :, 2], 0.1)[0] == pytest.approx(z[apex] - 0.1) and z[apex] - 0.1 > 0.05
 
 
 def test_seeds_agree_unless_one_interval_misses_another():
@@ -84,9 +80,9 @@ def test_seeds_agree_unless_one_interval_misses_another():
 
 def test_every_seed_and_a_t_interval_beside_the_bootstrap():
     c = np.array([[1, 1, 0, 1], [1, 0, 0, 1]], bool)
-    text = tables.seeds_ci(c)
+    text = seeds_ci(c)
     assert text.startswith("62.5 % [") and "; t [" in text and text.endswith("75.0 · 50.0")
-    assert tables.seeds_ci(c[:1]) == tables.pct_ci(bootstrap_accuracy(c[0])), "one seed: no t-interval"
+    assert seeds_ci(c[:1]) == pct_ci(bootstrap_accuracy(c[0])), "one seed: no t-interval"
     dv = stats.mean_difference(np.full(50, 3.0), np.full(40, 1.0))
     assert dv.value == 2.0 and dv.lo == dv.hi == 2.0
 
@@ -103,3 +99,100 @@ def test_a_column_draws_the_same_noise_for_every_engine_and_its_own_per_column()
     a, b = cal_off.inputs(ds, 30), cal_off.inputs(ds, 30)
     assert np.array_equal(a[1], b[1], equal_nan=True), "the same column draws the same noise"
     assert not np.array_equal(a[1], cal_on.inputs(ds, 30)[1], equal_nan=True), "air on and off draw apart"
+
+
+# ---------------------------------------------------------------------------------------------
+# The chapter's computation, on a cache of fake runs
+
+PERFECT = "air_on.far"
+"""The column where the fake MiniRocket gets every test throw right: it must be that column's best learner."""
+
+
+def _val(c) -> float:
+    return 0.7 + 0.1 * (c.seed == 0)
+
+
+@pytest.fixture(scope="module")
+def m(tmp_path_factory) -> motion.Motion:
+    runner = Runner.open("smoke", data_dir=tmp_path_factory.mktemp("data"))
+    p = runner.preset
+    for cell in ("peephole", "gru"):
+        cache_records(runner, paper.grid_configs(p, cell), test=False, val_score=_val)
+    cache_records(runner, paper.grid_configs(p, "peephole", "velocity"), test=False, val_score=_val)
+    cfgs = motion.configs(runner)
+    cols = motion.columns(CAL)
+    on = {True: runner, False: runner.air_off()}
+    for r, batch, _ in motion.plan(on, cfgs, cols, p.grid_seeds):
+        cache_records(r, batch, val_score=_val)
+        cache_models(r, batch)
+    T = cfgs["peephole_positions"].n_frames(runner.fps)
+    for c in cols:
+        r = on[c.air]
+        x_train, x_test = c.inputs(r.dataset, T)
+        y = np.asarray(r.dataset.test.y)
+        for s in p.grid_seeds:
+            labels = y if c.key == PERFECT else np.zeros_like(y)  # perfect, or every throw called light
+            cache_rocket(r, "z", T, s, {"test": x_test}, {"test": labels}, None if c.noise is None else x_train)
+    return motion.compute(runner, tracker=CAL)
+
+
+def test_every_number_keeps_its_name_and_reads_back_from_the_results_file(m, tmp_path):
+    names = [name for name, _ in m.numbers.entries()]
+    assert len(names) == len(set(names)) == 3 + 3 + 3 * 8 + 6 + 3 * 8 + 1 + 2 * 8
+    views = [c.key for c in motion.columns(CAL)]
+    for learner in ("peephole_positions", "peephole_velocity", "gru_velocity", "minirocket", "physics", "rule"):
+        assert all(f"motion.{learner}.{v}" in names for v in views)
+    assert "motion.peephole_exact_trained.air_on.near" in names
+    assert "motion.peephole_exact_trained.air_on.exact" not in names, "trained exact and tested exact: Table 1's"
+    assert {"motion.ceiling.air_off", "motion.ceiling.air_on", "motion.ceiling.air_off_restitution",
+            "motion.noise.calibrated", "motion.failed_runs", "motion.best.air_off.far.lead",
+            "motion.best.air_on.exact.gap_to_ceiling"} <= set(names)
+    f = tmp_path / "results.json"
+    f.write_text(results.dumps(m.numbers.entries()))
+    back = motion.Numbers.read(results.load(f))
+    assert back == m.numbers and back.best["air_on"]["far"].learner == "minirocket"
+
+
+def test_each_entry_is_what_its_learner_got_right(m):
+    n = len(m.entries["physics", "air_on.exact"].correct[0])
+    for (learner, key), e in m.entries.items():
+        seeded = learner not in ("physics", "rule")
+        assert e.correct.shape == ((2, n) if seeded else (1, n)), (learner, key)
+        source = m.numbers.learners[learner][e.column.air_key][e.column.name].source
+        assert source["seeds"] == ([0, 1] if seeded else []) and source["failed"] == e.failed
+    assert m.entries["minirocket", PERFECT].correct.all()
+    assert m.entries["rule", "air_off.exact"].feature in motion.RULE_FEATURES
+    assert all(m.entries[n, "air_on.exact"].val == pytest.approx(0.75) for n in motion.NETWORKS), "mean of 0.8, 0.7"
+
+
+def test_the_failed_runs_count_each_network_run_once(m):
+    assert m.n_runs == 8 * 3 * 2, "8 columns, 3 networks, 2 seeds; the exact-trained row is Table 1's runs again"
+    failed = sum(e.failed for (n, _), e in m.entries.items() if n in motion.NETWORKS)
+    assert m.n_failed == failed == m.numbers.failed_runs.value and m.numbers.failed_runs.unit == "count"
+
+
+def test_each_columns_best_learner_is_the_highest_mean_and_its_lead_is_paired(m):
+    for c in m.columns:
+        here = {n: e for (n, k), e in m.entries.items() if k == c.key}
+        best = m.numbers.best[c.air_key][c.name]
+        assert here[best.learner].correct.mean() == max(e.correct.mean() for e in here.values())
+        assert best.tied == (best.lead.lo <= 0 <= best.lead.hi) and best.lead.signed
+        assert best.gap_to_ceiling.value == pytest.approx(m.ceilings[c.key] - here[best.learner].correct.mean())
+    perfect = m.numbers.best["air_on"]["far"]
+    assert perfect.learner == "minirocket" and not perfect.tied and perfect.gap_to_ceiling.value == 0.0
+    for key in ("air_on.exact", "air_off.exact", "air_on.calibrated", "air_off.calibrated"):
+        assert f"the {motion.NAMES[m.leads[key].best]} at" in m.answer
+
+
+def test_the_tables_and_sentences(m):
+    assert len(m.motion_table.rows) == len(motion.LEARNERS) + 1
+    exact_trained = m.motion_table.rows[motion.LEARNERS.index("peephole_exact_trained")]
+    assert exact_trained["air_on.exact"] == "—" and exact_trained["air_on.near"].endswith("failed")
+    assert m.motion_table.rows[-1]["air_on.exact"] == "**100.0 %**"
+    assert [r["column"] for r in m.best_table.rows] == [c.heading for c in m.columns]
+    assert "ahead of the" in m.best_table.rows[3]["lead"], "the perfect MiniRocket leads its column"
+    assert len(m.seed_table.rows) == 8 * 3 + 6 + 8, "every seeded entry: networks, exact-trained, MiniRocket"
+    assert m.conditions.count(";") == 3 and m.drop_pct == "5.0" and m.restitution_overlap.count("–") == 1
+    assert m.vel_gain_on.startswith(("+", "-")) and m.length_s == 1.0
+    assert m.answer.startswith(f"Without air no classifier of these trajectories can beat "
+                               f"{pct(m.numbers.ceiling.air_off.value)};")

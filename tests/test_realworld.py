@@ -1,14 +1,20 @@
-"""The real-world pipeline: manifests, a rendered set with known classes, classification against the model contract."""
+"""The real-world pipeline (manifests, a rendered set with known classes, classification against the model contract)
+and the chapter *Real-world test*'s numbers, tables and sentences from labels made in the test."""
 
 from __future__ import annotations
 
 import os
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from study.experiments import realworld
+from study.book import results
 from study.core.errors import ConfigError, DataError
+from study.experiments import paper, realworld
+from study.experiments.runner import Recommendation
+from study.experiments.text import Table
+from study.learn.metrics import Interval
 from study.see import render
 from study.simulate import synth
 
@@ -47,16 +53,16 @@ def test_render_set_labels_truth_and_cache(rendered_set, tmp_path):
 
 def test_classify_rows_and_accuracy(rendered_set):
     rows = realworld.classify(HeightRangeModel(), rendered_set, progress=False)
-    assert [r["file"] for r in rows] == [v.path.name for v in rendered_set]
+    assert [r.file for r in rows] == [v.path.name for v in rendered_set]
     for r in rows:
-        assert r["error"] == "" and 0.9 <= r["found"] <= 1.0 and r["p_light"] + r["p_heavy"] == pytest.approx(1.0)
+        assert r.tracked and 0.9 <= r.found <= 1.0 and r.p_light + r.p_heavy == pytest.approx(1.0)
     acc = realworld.per_class_interval(rows)
     assert set(acc) == {"light", "heavy"}
     for c, iv in acc.items():
-        k = sum(r["correct"] for r in rows if r["label"] == c)
+        k = sum(r.correct for r in rows if r.label == c)
         assert iv.value == k / 1 and iv.lo <= iv.value <= iv.hi and "Wilson" in iv.method
     err = realworld.tracking_error(rendered_set)
-    assert err["found"] >= 0.9 and err["mean_px"] < 3.0
+    assert err.found >= 0.9 and err.mean_px < 3.0
 
 
 def test_height_factor_reaches_the_model(rendered_set):
@@ -102,7 +108,7 @@ def test_untrackable_video_is_a_row_not_a_crash(tmp_path):
     bad = tmp_path / "bad.mp4"
     bad.write_text("not a video")
     rows = realworld.classify(HeightRangeModel(), [realworld.Video(bad, "light")], progress=False)
-    assert rows[0]["error"] and "bad.mp4" in rows[0]["error"]
+    assert not rows[0].tracked and "bad.mp4" in rows[0].error and not rows[0].correct
     assert realworld.per_class_interval(rows)["light"] is None  # nothing classified, no interval
 
 
@@ -139,3 +145,104 @@ def test_class_model_refuses_a_sleep_tolerance_that_would_freeze_a_throw_in_mid_
         render.class_model("heavy", sleep_tolerance=2 * limit)
     with pytest.raises(ConfigError, match="sleep_tolerance"):
         render.class_model("heavy", sleep_tolerance=-1e-3)
+
+
+# ---------------------------------------------------------------------------------------------
+# The chapter's numbers, tables and sentences, from labels made here (no video, no model)
+
+
+def _label(file: str, label: str, predicted: str = "", error: str = "") -> realworld.Label:
+    if error:
+        return realworld.Label(file, label, error)
+    p_light = 0.8 if predicted == "light" else 0.3
+    return realworld.Label(file, label, "", 30, 0.9, 1, 1, 2, 0.01, p_light, 1 - p_light, predicted)
+
+
+RENDERED = [_label("light_000.mp4", "light", "light"), _label("light_001.mp4", "light", "heavy"),
+            _label("heavy_002.mp4", "heavy", "heavy"), _label("heavy_003.mp4", "heavy", error="lost it")]
+REAL = [_label("ball.mp4", "light", "light"), _label("ball2.mp4", "light", error="not found")]
+NAMES = ["positions, exact", "positions, randomised", "velocity, exact", "velocity, randomised"]
+
+
+def _rec(choice: str = "velocity, randomised") -> Recommendation:
+    val = {n: Interval(0.5 + 0.1 * i, 0.4, 0.9, "bootstrap") for i, n in enumerate(NAMES)}
+    return Recommendation(choice, val, {})
+
+
+def test_the_numbers_keep_their_names_follow_the_labels_and_read_back(tmp_path):
+    labels = {"table1": ("Table 1's Z model", RENDERED, REAL),
+              "recommended": ("recommended (velocity, randomised)", RENDERED[:2], [])}
+    n = realworld.reported(_rec(), labels)
+    names = [name for name, _ in n.entries()]
+    assert {"realworld.figure1", "realworld.figure5", "realworld.figure6", "realworld.table1.rendered.light",
+            "realworld.table1.rendered.heavy", "realworld.table1.real.light",
+            "realworld.candidate.velocity.randomised.val", "realworld.recommended.rendered.light"} <= set(names)
+    assert "realworld.table1.real.heavy" not in names, "no real heavy clip: no number"
+    assert "realworld.recommended.rendered.heavy" not in names, "no heavy video classified: no number"
+    light, heavy = n.models["table1"].rendered["light"], n.models["table1"].rendered["heavy"]
+    assert light.value == 0.5 and "1 of 2" in light.method and heavy.value == 1.0 and "1 of 1" in heavy.method
+    assert light.paper == paper.REAL_WORLD["light"] and heavy.paper == paper.REAL_WORLD["heavy"]
+    assert light.verdict == "not comparable" and "rendered MuJoCo" in light.decision.reason
+    real = n.models["table1"].real["light"]
+    assert real.value == 1.0 and "tennis balls" in real.decision.reason
+    assert n.candidate["velocity"]["exact"].val.value == pytest.approx(0.7)
+    assert n.figure5.verdict == "qualitative" and n.models["table1"].rendered["light"].what == (
+        "rendered light videos classified correctly, Table 1's Z model")
+    f = tmp_path / "results.json"
+    f.write_text(results.dumps(n.entries()))
+    assert realworld.Numbers.read(results.load(f)) == n
+
+
+def test_the_tables_show_the_paper_beside_ours_and_say_when_there_is_no_footage():
+    numbers = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, REAL)})
+    acc = realworld._acc_table({"Table 1's Z model": (numbers.models["table1"], REAL)}, 2)
+    md = acc.markdown()
+    assert "93 % (golf ball, real)" in md and "100 % (wooden cube, real)" in md and "(2 per class)" in md
+    assert "100.0 % [" in md and "(tennis balls, n = 2)" in md and "no footage" in md and "not comparable" in md
+    real = realworld._real_table(REAL)
+    assert [r["label"] for r in real.rows] == ["light", "not tracked: not found"] and real.rows[1]["found"] == "—"
+    assert realworld._real_table([]).markdown() == "*No real clips were found.*"
+    val = realworld._val_table(_rec("positions, randomised")).rows
+    assert [r["chosen"] for r in val] == ["", "✓", "", ""]
+
+
+def test_per_class_accuracy_counts_only_the_videos_tracked_and_the_scale_error_is_a_median():
+    acc = realworld.per_class_interval(RENDERED)
+    assert acc["light"].value == 0.5 and acc["heavy"].value == 1.0 and "1 of 1" in acc["heavy"].method
+    assert realworld.per_class_interval(RENDERED[3:])["heavy"] is None
+    tracks = [realworld.Tracked(SimpleNamespace(height_per_pixel=s)) for s in (0.011, 0.009, 0.0125)]
+    assert realworld.scale_error(tracks + [realworld.Tracked(None, "lost")], 0.01) == pytest.approx(0.1)
+
+
+def _result(numbers: realworld.Numbers, choice: str) -> realworld.RealWorld:
+    empty = Table([], {})
+    return realworld.RealWorld(numbers, (), (), _rec(choice), realworld.PixelError(2.14, 4.16, 0.987), (), (), (),
+                               empty, empty, empty, empty, empty, 2, 0, 30, "1", "320×240", "8.4 %")
+
+
+def test_the_sentences_follow_the_numbers():
+    only = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, [])})
+    r = _result(only, "positions, exact")
+    assert r.choice_text == "the recommended one, which is Table 1's model itself"
+    assert r.real_words == "no real clips were found to classify"
+    assert (r.err_mean, r.err_p95, r.found_rendered) == ("2.1", "4.2", "98.7 %")
+    both = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, REAL),
+                                       "recommended": ("recommended (velocity, randomised)", RENDERED, REAL)})
+    r = _result(both, "velocity, randomised")
+    assert r.choice_text == "the recommended one, velocity, randomised"
+    assert r.real_words.startswith("of the real clips (light), it labels 100.0 % [")
+
+
+def test_real_clips_from_a_manifest_or_none(tmp_path, monkeypatch):
+    for name in ("b.mp4", "a.mp4", "c.mp4"):
+        (tmp_path / name).write_bytes(b"x")
+    (tmp_path / "MANIFEST.csv").write_text("file,label\nb.mp4,ball\na.mp4,cube\nc.mp4,light\n")
+    clips = realworld.real_clips(tmp_path, "orange", 0.1, limit=2)
+    assert [(v.path.name, v.label, v.color, v.rest_height) for v in clips] == [("a.mp4", "heavy", "orange", 0.05),
+                                                                              ("b.mp4", "light", "orange", 0.05)]
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    monkeypatch.setenv(realworld.REAL_CLIPS_ENV, str(empty))
+    assert realworld.real_clips() == [], "no footage beside the project: no real clips, no error"
+    with pytest.raises(DataError, match="MANIFEST.csv"):
+        realworld.real_clips(empty)  # a folder the reader named must hold a manifest

@@ -32,8 +32,8 @@ SHORT_NAMES: dict[str, str] = {
     **{m: f"study.learn.{m}" for m in ("config", "metrics", "model", "native", "gru", "train", "stream", "baseline",
                                         "rocket")},
     **{m: f"study.see.{m}" for m in ("video", "render", "track")},
-    **{m: f"study.experiments.{m}" for m in ("cues", "realworld", "decide")},
-    **{m: f"study.book.{m}" for m in ("results", "figures", "tables")},
+    **{m: f"study.experiments.{m}" for m in ("cues", "realworld", "decide", "table1", "verdicts", "text")},
+    **{m: f"study.book.{m}" for m in ("results", "figures", "publish")},
 }
 """``study.<short>`` -> the module it names, for ``from study import synth`` and friends."""
 

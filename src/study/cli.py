@@ -323,7 +323,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         if a.input.suffix.lower() == ".csv":
             traj = track.read_csv(a.input)
             if a.metres_per_pixel is not None:
-                traj = track.calibrate(traj, ground_v=traj.ground_v, metres_per_pixel=a.metres_per_pixel)
+                traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=a.metres_per_pixel)
             elif traj.units != "m":
                 raise ConfigError(
                     f"trajectory CSV {a.input}: heights are in pixels; give --metres-per-pixel, or re-track "
@@ -349,7 +349,8 @@ def _add_results(sub: argparse._SubParsersAction) -> None:
             "Read a results file written by `study book` (_build/results.json: every number of the book "
             "with its 95 % interval, the paper's number and the verdict) and print it. With --compare, "
             "pair its numbers with another build's and list those that moved: one build's value outside "
-            "the other's interval. Exit status 0 either way (2 for a missing or malformed file)."
+            "the other's interval, and the verdicts the two decide differently. Exit status 0 either way (2 for a "
+            "missing or malformed file)."
         ),
     )
     p.add_argument("file", type=Path, nargs="?", default=Path("_build/results.json"),
@@ -359,22 +360,29 @@ def _add_results(sub: argparse._SubParsersAction) -> None:
 
     def run(a: argparse.Namespace) -> int:
         from study.book import results
+        from study.experiments.reported import Verdict
+        from study.experiments.text import fmt, fmt_value
 
         mine = results.load(a.file)
         if a.compare is None:
-            for n in mine.values():
-                paper = "" if n.paper is None else f"  paper {results.fmt_value(n.paper, n.unit)}"
+            for name, n in mine.items():
+                if isinstance(n, Verdict):
+                    print(f"{name}: {n.verdict}")
+                    continue
+                paper = "" if n.paper is None else f"  paper {fmt_value(n.paper, n.unit)}"
                 verdict = f"  {n.verdict}" if n.verdict else ""
-                print(f"{n.name}: {results.fmt(n)}{paper}{verdict}")
+                print(f"{name}: {fmt(n)}{paper}{verdict}")
             return 0
         other = results.load(a.compare)
-        pairs, only_a, only_b = results.compare(mine, other)
-        moved = [m for m in pairs if m.moved]
-        for m in pairs if a.all else moved:
+        c = results.compare(mine, other)
+        for m in c.pairs if a.all else c.moved:
             flag = "MOVED" if m.moved else "same "
-            print(f"{flag} {m.name}: {results.fmt(m.a)}  vs  {results.fmt(m.b)}")
-        print(f"{len(moved)} of {len(pairs)} shared numbers moved outside the other build's interval; "
-              f"{len(only_a)} only in {a.file}, {len(only_b)} only in {a.compare}")
+            print(f"{flag} {m.name}: {fmt(m.a)}  vs  {fmt(m.b)}")
+        for name, va, vb in c.verdicts:
+            print(f"VERDICT {name}: {va}  vs  {vb}")
+        print(f"{len(c.moved)} of {len(c.pairs)} shared numbers moved outside the other build's interval; "
+              f"{len(c.verdicts)} verdicts differ; {len(c.only_a)} only in {a.file}, {len(c.only_b)} only in "
+              f"{a.compare}")
         return 0
 
     p.set_defaults(run=run)

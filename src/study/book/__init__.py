@@ -1,6 +1,7 @@
 """The book: the builder that executes each chapter with papermill and renders them with Jupyter Book, what it
-does to an executed chapter (``nbtidy``), the build's results file with its verdicts (``results``), and the
-helpers the chapters share for figures and tables (``figures``, ``tables``).
+does to an executed chapter (``nbtidy``), the build's results file (``results``), the one call that hands a
+chapter's typed result to its page and to that file (``publish``), the summary page read from it (``summary``),
+the introduction's software table (``software``) and the book's figure style (``figures``).
 
 ``study.book.build(root, preset, ...)`` is what ``study book`` and ``make book`` run.
 """
@@ -15,9 +16,9 @@ from study.book.builder import (
     inputs_fingerprint,
     notebook_parameters,
     plan_totals,
-    render,
-    summary,
+    render_html,
+    timings_table,
 )
 
 __all__ = ["EXECUTED", "FAILED", "Chapter", "build", "chapters", "execute", "inputs_fingerprint",
-           "notebook_parameters", "plan_totals", "render", "summary"]
+           "notebook_parameters", "plan_totals", "render_html", "timings_table"]

@@ -39,9 +39,9 @@ from study.core.cache import canonical_json, key, source_hash, write_text_atomic
 from study.core.errors import ChapterError, ConfigError, check_writable
 from study.core.progress import ENV as PROGRESS_ENV
 from study.core.progress import Follower
+from study.experiments import cluster
+from study.experiments.cluster import PLAN_ENV
 
-PLAN_ENV = "STUDY_PLAN_PART"
-"""Environment variable naming the file a chapter lists its training runs in (``study.experiments.runs.Plan``)."""
 RUNTIME = ("scheduler",)
 """Parameters that say where a chapter's work runs, not what it computes: injected into the chapters that
 declare them, and left out of every chapter's cache key."""
@@ -469,10 +469,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
 
 def plan_totals(root: Path) -> dict[str, float]:
     """The distinct models the book's chapters train (``models``) and the CPU seconds their records took
-    (``train_seconds``), from each chapter's plan part (``study.experiments.runs.plan_totals``)."""
-    from study.experiments.runs import plan_totals as totals
-
-    return totals([ch.plan_part for ch in chapters(root)])
+    (``train_seconds``), from each chapter's plan part (``study.experiments.cluster.plan_totals``)."""
+    return cluster.plan_totals([ch.plan_part for ch in chapters(root)])
 
 
 def _duration(seconds: float) -> str:
@@ -482,7 +480,7 @@ def _duration(seconds: float) -> str:
     return f"{whole // 60} min {whole % 60} s"
 
 
-def summary(timings: dict[str, dict[str, Any]], runs: dict[str, float] | None = None) -> str:
+def timings_table(timings: dict[str, dict[str, Any]], runs: dict[str, float] | None = None) -> str:
     """The table :func:`build` prints at the end: each chapter, whether it ran, and how long it took; with
     ``runs`` (:func:`plan_totals`), how many models the book trains and their CPU time."""
     width = max(len(s) for s in timings)
@@ -512,14 +510,10 @@ def _cluster(scheduler: str) -> Iterator[str]:
     if scheduler != "local":
         yield scheduler
         return
-    from distributed import LocalCluster
-
-    from study.experiments.runs import default_workers
-
-    with LocalCluster(n_workers=default_workers(), threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster:
-        tqdm.write(f"dask: a LocalCluster of {default_workers()} workers at {cluster.scheduler_address}", file=sys.stderr)
-        yield cluster.scheduler_address
+    with cluster.local_cluster(cluster.default_workers()) as local:
+        tqdm.write(f"dask: a LocalCluster of {cluster.default_workers()} workers at {local.scheduler_address}",
+                   file=sys.stderr)
+        yield local.scheduler_address
 
 
 def _stage(root: Path) -> Path:
@@ -554,7 +548,7 @@ def _jupyter_book() -> list[str]:
     return [str(exe)] if exe.is_file() else [sys.executable, "-m", "jupyter_book"]
 
 
-def render(root: Path) -> Path:
+def render_html(root: Path) -> Path:
     """Render the executed book to ``<root>/_build/html`` (execution off, warnings are errors)."""
     root = Path(root).resolve()
     src = _stage(root)
@@ -586,8 +580,8 @@ def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bo
     check_writable(root / EXECUTED / "timings.json", "book output folder")
     with _cluster(scheduler) as address:
         timings = execute(root, preset, force=force, only=only, scheduler=address)
-    print(summary(timings, plan_totals(root)), file=sys.stderr)
+    print(timings_table(timings, plan_totals(root)), file=sys.stderr)
     if html:
-        index = render(root) / "index.html"
+        index = render_html(root) / "index.html"
         print(f"the book: {index}", file=sys.stderr)
         print(index)

@@ -7,10 +7,16 @@ works under Agg (scripts, tests) and under the notebook's inline backend alike.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import matplotlib as mpl
 from matplotlib.figure import Figure
+
+from study.experiments.cues import Bin, Point, Sweep
+from study.experiments import paper
+from study.experiments.runtable import Runs
+from study.experiments.stats import Summary
 
 # Okabe & Ito (2008), "Color Universal Design": distinguishable with every common colour deficiency.
 OKABE_ITO: dict[str, str] = {
@@ -60,39 +66,43 @@ def use_style() -> None:
     mpl.rcParams.update(STYLE)
 
 
-DIMS_NAMES = {"xyz": "X, Y, Z", "z": "Z only"}
+DIMS_NAMES = paper.DIMS_NAMES
+"""The inputs' names (their one home is ``study.experiments.paper``)."""
 DIMS_COLORS = {"xyz": OKABE_ITO["blue"], "z": OKABE_ITO["orange"]}
 """Colour of each input in every figure that compares them."""
 
 
-def accuracy_vs_length(summary: list[dict], rows: list[dict], long_summary: list[dict] = ()) -> Figure:
+def accuracy_vs_length(summary: Sequence[Summary], runs: Runs, long_summary: Sequence[Summary] = ()) -> Figure:
     """The paper's Figure 4, ours: test accuracy against input length, one panel per input (X, Y, Z; Z).
 
-    ``summary``: ``study.experiments.summarise(rows, ("dims", "length"))`` (mean and 95 % interval,
-    drawn as a line and a band); ``rows``: the single runs (dots; a cross for a run that failed to
+    ``summary``: ``study.experiments.stats.summarise(runs, ("dims", "length"))`` (mean and 95 % interval,
+    drawn as a line and a band); ``runs``: the single runs (dots; a cross for a run that failed to
     train); ``long_summary``: the long-memory variant's summary, drawn as open diamonds with error bars.
+    (``study.experiments.length.Sweep`` holds all three.)
     """
     import matplotlib.pyplot as plt
+
+    def of(groups: Sequence[Summary], d: str) -> list[Summary]:
+        return sorted((g for g in groups if g.keys["dims"] == d), key=lambda g: g.keys["length"])
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
     for ax, d in zip(axes, ("xyz", "z")):
         c = DIMS_COLORS[d]
-        s = sorted((r for r in summary if r["dims"] == d), key=lambda r: r["length"])
-        L = [r["length"] for r in s]
-        ax.fill_between(L, [100 * r["interval"].lo for r in s], [100 * r["interval"].hi for r in s],
+        s = of(summary, d)
+        L = [g.keys["length"] for g in s]
+        ax.fill_between(L, [100 * g.interval.lo for g in s], [100 * g.interval.hi for g in s],  # type: ignore[union-attr]
                         color=c, alpha=0.2, linewidth=0)
-        ax.plot(L, [100 * r["mean"] for r in s], "o-", color=c, label="paper's network (mean, 95 % CI)")
-        runs = [r for r in rows if r["dims"] == d]
+        ax.plot(L, [100 * g.mean for g in s], "o-", color=c, label="paper's network (mean, 95 % CI)")
         for failed, marker, colour in ((False, ".", c), (True, "x", "black")):
-            pts = [r for r in runs if bool(r["failed"]) == failed]
-            ax.plot([r["length"] for r in pts], [100 * r["accuracy"] for r in pts], marker, color=colour,
+            pts = runs.where(dims=d, failed=failed)
+            ax.plot(pts.values("length"), 100 * pts.accuracies(), marker, color=colour,
                     alpha=0.5 if not failed else 1.0, markersize=7 if failed else 5,
                     label=f"failed to train ({len(pts)} runs)" if failed else None)
-        m = sorted((r for r in long_summary if r["dims"] == d), key=lambda r: r["length"])
+        m = of(long_summary, d)
         if m:
-            ax.errorbar([r["length"] for r in m], [100 * r["mean"] for r in m],
-                        yerr=[[100 * (r["mean"] - r["interval"].lo) for r in m],
-                              [100 * (r["interval"].hi - r["mean"]) for r in m]],
+            ax.errorbar([g.keys["length"] for g in m], [100 * g.mean for g in m],
+                        yerr=[[100 * (g.mean - g.interval.lo) for g in m],  # type: ignore[union-attr]
+                              [100 * (g.interval.hi - g.mean) for g in m]],  # type: ignore[union-attr]
                         fmt="D", markerfacecolor="none", color="black", capsize=3,
                         label="memory that spans the input (chrono, full BPTT)")
         ax.axhline(50, color="0.5", linestyle=":", linewidth=1, label="chance")
@@ -102,40 +112,42 @@ def accuracy_vs_length(summary: list[dict], rows: list[dict], long_summary: list
     return fig
 
 
-def robustness_curves(curves: list[dict], sweeps: dict, marks: dict, groups: list[str]) -> Figure:
+def robustness_curves(points: Sequence[Point], sweeps: Mapping[str, Sweep], marks: Mapping[str, float],
+                      groups: Mapping[str, str]) -> Figure:
     """One panel per sweep of ``study.experiments.cues.robustness``: accuracy (mean, 95 % band) of each model group
-    against the sweep's values, a dotted line at ``marks[sweep]`` (the calibrated or exact value)."""
+    (``groups``: its key -> its legend) against the sweep's values, a dotted line at ``marks[sweep]`` (the
+    calibrated or exact value)."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(2, 3, figsize=(11, 6), sharey=True)
     colours = [OKABE_ITO["orange"], OKABE_ITO["bluish_green"], OKABE_ITO["reddish_purple"]]
-    for ax, (name, (label, _values, _make)) in zip(axes.ravel(), sweeps.items()):
-        for group, colour in zip(groups, colours):
-            pts = [r for r in curves if r["sweep"] == name and r["group"] == group]
-            v = [r["value"] for r in pts]
-            ax.fill_between(v, [100 * r["interval"].lo for r in pts], [100 * r["interval"].hi for r in pts],
+    for ax, (name, sweep) in zip(axes.ravel(), sweeps.items()):
+        for (group, legend), colour in zip(groups.items(), colours):
+            pts = [r for r in points if r.sweep == name and r.group == group]
+            v = [r.value for r in pts]
+            ax.fill_between(v, [100 * r.interval.lo for r in pts], [100 * r.interval.hi for r in pts],
                             color=colour, alpha=0.2, linewidth=0)
-            ax.plot(v, [100 * r["interval"].value for r in pts], "o-", color=colour, label=group)
+            ax.plot(v, [100 * r.interval.value for r in pts], "o-", color=colour, label=legend)
         ax.axvline(marks[name], color="black", ls=":", lw=1)
         ax.axhline(50, color="0.5", ls=":", lw=1)
-        ax.set(xlabel=label)
+        ax.set(xlabel=sweep.label)
     for ax in axes[:, 0]:
         ax.set_ylabel("test accuracy (%)")
     axes[0, 0].legend(fontsize=8)
     return fig
 
 
-def accuracy_by_parameter(curves: dict[tuple[str, str], list[dict]], names: tuple[str, ...]) -> Figure:
-    """Accuracy against each throw parameter (``study.experiments.cues.by_parameter`` rows under ``curves[(name, dims)]``),
-    one panel per parameter, a line per class and input (solid X, Y, Z; dashed Z)."""
+def accuracy_by_parameter(curves: Mapping[tuple[str, str], Sequence[Bin]], names: tuple[str, ...]) -> Figure:
+    """Accuracy against each throw parameter (``study.experiments.cues.by_parameter`` bins under
+    ``curves[(name, dims)]``), one panel per parameter, a line per class and input (solid X, Y, Z; dashed Z)."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, len(names), figsize=(11, 3.2), sharey=True)
     for ax, name in zip(axes, names):
         for d, ls in (("xyz", "-"), ("z", "--")):
             for label, cname in enumerate(CLASS_COLORS):
-                q = [r for r in curves[name, d] if r["class"] == label]
-                ax.plot([r["centre"] for r in q], [100 * r["accuracy"] for r in q], ls, marker="o", ms=3,
+                q = [r for r in curves[name, d] if r.label == label]
+                ax.plot([r.centre for r in q], [100 * r.accuracy for r in q], ls, marker="o", ms=3,
                         color=CLASS_COLORS[cname], label=f"{cname}, {DIMS_NAMES[d]}")
         ax.set(xlabel=name + (" (kg, log scale)" if name == "mass" else ""), xscale="log" if name == "mass" else "linear")
     axes[0].set_ylabel("test accuracy (%)")

@@ -8,7 +8,7 @@ A chapter's computation returns a frozen dataclass (``study.experiments.table1.T
   (``table1.xyz.paper_way`` as ``xyz.paper_way``), formatted as the book writes it (``70.8 % [69.6, 72.0]``),
   and a number's verdict, if it has one, as ``xyz.paper_way.verdict``;
 - glues every other field and public property of ``result`` that is text (a sentence the result builds), a
-  :class:`~study.experiments.text.Table` (as Markdown) or a plain number (raw, so the page may format it:
+  :class:`~study.experiments.text.Table` or :class:`~study.experiments.text.Bullets` (as Markdown) or a plain number (raw, so the page may format it:
   ``{glue:text}`n_params:d```); figure data, configs and run tables are left to the page's visible code;
 - writes the numbers to the chapter's part of the results file when the book builder runs the chapter
   (``study.book.results.write_part``).
@@ -27,7 +27,7 @@ from typing import Any
 from study.book import results
 from study.core.errors import ConfigError
 from study.experiments.reported import Leaf, Number, Reported
-from study.experiments.text import Table, fmt
+from study.experiments.text import Bullets, Table, fmt
 
 
 def glued(result: Any) -> Iterator[tuple[str, Any]]:
@@ -45,7 +45,7 @@ def glued(result: Any) -> Iterator[tuple[str, Any]]:
     names += [n for n, v in vars(type(result)).items() if isinstance(v, property) and not n.startswith("_")]
     for name in names:
         value = getattr(result, name)
-        if isinstance(value, Table):
+        if isinstance(value, (Table, Bullets)):
             yield _once(seen, name), value
         elif isinstance(value, str) or (isinstance(value, _numbers.Real) and not isinstance(value, bool)):
             yield _once(seen, name), value
@@ -78,5 +78,5 @@ def publish(result: Any) -> Path | None:
     from myst_nb import glue
 
     for name, value in glued(result):
-        glue(name, Markdown(value.markdown()) if isinstance(value, Table) else value, display=False)
+        glue(name, Markdown(value.markdown()) if isinstance(value, (Table, Bullets)) else value, display=False)
     return results.write_part(_numbers_of(result).CHAPTER, leaves(result))

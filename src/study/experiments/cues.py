@@ -1,64 +1,224 @@
-"""The experiments of the chapter on cues: which cue separates the classes, and how robust the classifier is.
+"""The chapter *What the network sees*: which cue separates the classes, and how robust the classifier is.
 
-Our classes differ in restitution and friction, as the paper intends, but also in mass, and mass shows
-in the motion through air drag: a light box falls measurably slower than a heavy one. These functions
-ask which of those cues a classifier uses, with Table 1's protocol and configuration (no new grid):
+Our classes differ in restitution and friction, as the paper intends, but also in mass, and mass shows in the
+motion through air drag: a light box falls measurably slower than a heavy one. :func:`compute` asks which of
+those cues a classifier uses, with Table 1's protocol and configuration (no new grid), and returns :class:`Cues`:
 
-- :func:`observation_calibration`: the tracker's error on rendered video, the size of the observation
-  model's noise (``study.simulate.observe``; the runner caches it: ``Runner.calibration``);
-- :func:`rules`: the one-feature rules on the first T seconds the networks see;
-- :func:`ceiling`: what a classifier given each throw's true restitution and friction (and mass) reaches;
-- :func:`robustness`: accuracy against each parameter of the observation model;
-- :func:`by_parameter`: accuracy against each throw's restitution, mass and friction;
-- :func:`shape_sets`, :func:`mixed_shapes`: other shapes, and a training set that mixes them.
+1. the drag cue (:func:`drag_cue`): the first fall's vertical acceleration, one threshold on it, and the same
+   threshold under tracker noise;
+2. the tracker's error on rendered video (``Runner.tracker_error``, ``study.experiments.tracker``);
+3. four conditions (:func:`conditions`): (a) exact positions with air, (b) the same throws without air, (c)
+   Table 1's Z models tested as observed, (d) Z models trained on random observations; the one-feature rules
+   (:func:`rules`) on the same input; the fitted ceiling (:func:`ceiling`); whether the network beats the best
+   rule without drag;
+4. accuracy against each parameter of the observation model (:func:`robustness`);
+5. accuracy against each throw's restitution, mass and friction (:func:`by_parameter`, :func:`overlap`);
+6. other shapes (:func:`shape_sets`, :func:`mixed_shapes`, :func:`shape_scores`);
+7. the exact ceiling of the priors (``study.experiments.ceiling``).
+
+:class:`Numbers` is what the chapter reports (``cues.drag_rule.exact`` and so on); ``study.book.publish`` glues
+the rest of :class:`Cues` (its sentences and tables).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from study.core import cache
-from study.experiments import realworld
+from study.experiments import paper, verdicts
+from study.experiments.ceiling import exact_ceiling
+from study.experiments.reported import Leaf, Number, Reported, Verdict, named, number
+from study.experiments.runner import Runner
+from study.experiments.runtable import Runs
 from study.experiments.stats import scored
+from study.experiments.text import Table, pct_ci, seeds_ci
+from study.experiments.tracker import TrackerError
 from study.learn import baseline
-from study.learn.metrics import Interval, bootstrap_accuracy
-from study.see import render, track
+from study.learn.config import Dims, TrainConfig
+from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
+from study.learn.train import TrainedModel
 from study.simulate import data, measure, observe, synth
 from study.simulate.scene import Shape
 
+Condition = Literal["a", "b", "c", "d"]
+RuleCondition = Literal["a", "b", "c"]
+"""The conditions the one-feature rules are fitted in ((d) differs from (c) only in the network's training)."""
+Group = Literal["exact", "random"]
+"""The two groups of Z models: trained on exact positions (Table 1's), or on random observations."""
+
+CONDITIONS: dict[Condition, str] = {"a": "(a) exact, air on", "b": "(b) exact, air off",
+                                    "c": "(c) observed (trained exact)",
+                                    "d": "(d) observed (trained on random observations)"}
+"""Each condition in words."""
+GROUPS: dict[Group, str] = {"exact": "trained on exact positions", "random": "trained on random observations"}
+"""Each group of Z models in words."""
+PARAMETERS = ("restitution", "mass", "friction")
+"""The throw parameters the errors are set against."""
+DRAG = "fall_acceleration"
+"""The drag rule's feature (``study.simulate.measure.FEATURES``)."""
+ROBUSTNESS_SEED = 5
+"""Seed of the observation noise of every point of the robustness sweeps."""
+
+
 # ---------------------------------------------------------------------------------------------
-# The observation model's size, from the tracker on rendered video
+# What the chapter reports
 
 
-def observation_calibration(videos: Sequence[realworld.Video], depth: float = 4.0) -> dict[str, float]:
-    """The tracker's vertical error on rendered videos with known truth, as the observation model needs it.
+@dataclass(frozen=True)
+class DragRuleNumbers(Reported):
+    """One threshold on the first fall's acceleration, chosen on the training split."""
 
-    For each video the tracked centroid's image row minus the true centre's projection, over the frames
-    the tracker measured, has its median removed (the constant offset between the centre of the box's
-    visible faces and the image of its centre); what is left is pooled over the videos. Returns
-    ``noise_px``, its standard deviation in pixels; ``noise_m``, the same in metres at ``depth`` (the
-    camera's distance to the throw); ``drop``, the share of frames the tracker lost while the object
-    was in the picture; and ``n_frames``.
-    """
-    residuals, lost, seen = [], 0, 0
-    for v in videos:
-        if v.truth is None:
-            continue
-        truth = render.read_truth(v.truth)
-        traj = track.detect_all(v.path, track.TrackConfig(color=v.color, progress=False))
-        m = traj.measured
-        err = (traj.v - truth["v"])[m]
-        residuals.append(err - np.median(err))
-        lost += int((~m).sum())
-        seen += len(m)
-    r = np.concatenate(residuals)
-    mpp = render.metres_per_pixel(render.class_model("light"), "side", 240, depth=depth)
-    return {"noise_px": float(r.std()), "noise_m": float(r.std() * mpp), "drop": lost / max(seen, 1),
-            "n_frames": int(len(r)), "metres_per_pixel": mpp}
+    exact: Number
+    """Test accuracy on exact positions."""
+    noise: dict[str, Number] = named("noise_{key}mm")
+    """Test accuracy with each tracker noise (the key: millimetres, as the chapter writes them)."""
+
+
+@dataclass(frozen=True)
+class TrackerNumbers(Reported):
+    """The tracker's error on rendered video (:class:`~study.experiments.tracker.TrackerError`)."""
+
+    noise_m: Number
+    """Its vertical error, metres."""
+    drop: Number
+    """The share of frames it lost."""
+
+
+@dataclass(frozen=True)
+class CeilingNumbers(Reported):
+    """What the priors allow a classifier told each throw's true parameters."""
+
+    restitution_friction: Number
+    """The fitted estimate: logistic regression on the true restitution and friction, on the test split."""
+    with_mass: Number
+    """The same, told the mass too."""
+    exact: Number
+    """The exact ceiling of the priors on restitution and friction (``study.experiments.ceiling``)."""
+
+
+@dataclass(frozen=True)
+class Curve(Reported):
+    """One sweep of the observation model: each group's accuracy at each of its values.
+
+    A value's key is the value as ``:g`` writes it (``"0.1"``), so it may hold a dot: :meth:`read` finds the keys
+    by the groups that end each name."""
+
+    points: dict[str, dict[Group, Number]] = named("")
+
+    @classmethod
+    def read(cls, stored: Mapping[str, Leaf], prefix: str | None = None) -> Curve:
+        base = f"{prefix}."
+        values: list[str] = []
+        for name in stored:
+            for g in GROUPS:
+                if name.startswith(base) and name.endswith(f".{g}") and len(name) > len(base) + len(g) + 1:
+                    v = name[len(base):-len(g) - 1]
+                    values += [v] if v not in values else []
+        return cls({v: {g: stored[f"{base}{v}.{g}"] for g in GROUPS if f"{base}{v}.{g}" in stored} for v in values})
+
+
+@dataclass(frozen=True)
+class ErrorNumbers(Reported):
+    """Where the errors fall (Z only)."""
+
+    overlap_z: Number
+    """Accuracy on throws whose restitution lies where the two priors overlap."""
+    outside_z: Number
+    """Accuracy on the other throws."""
+
+
+@dataclass(frozen=True)
+class ShapeNumbers(Reported):
+    """One test shape."""
+
+    cube_model: Number
+    """Table 1's Z models (trained on the 20 cm cube)."""
+    mixed_model: Number
+    """The Z models trained on mixed shapes."""
+
+
+@dataclass(frozen=True)
+class Numbers(Reported):
+    """Every number the chapter *What the network sees* reports."""
+
+    CHAPTER = "cues"
+    drag_rule: DragRuleNumbers
+    tracker: TrackerNumbers
+    conditions: dict[Condition, dict[Dims, Number]] = named("condition_{key}")
+    """The peephole LSTM in each condition."""
+    best_rule: dict[RuleCondition, Number] = named("best_rule_{key}")
+    """The best one-feature rule (chosen on training accuracy) in each condition."""
+    drag_rules: dict[RuleCondition, Number] = named("drag_rule_{key}")
+    """The drag rule in each condition."""
+    ceiling: CeilingNumbers = named("ceiling")
+    network_minus_rule_b: dict[Dims, Number] = named("network_minus_rule_b")
+    """Without air: the network (mean of seeds) minus the best rule, with the verdict that it is above."""
+    claim_without_drag: Verdict = named("claim_without_drag")
+    """Both inputs' verdicts made one: without drag, the network beats every one-feature rule."""
+    robustness: dict[str, Curve] = named("robustness")
+    """Each sweep of the observation model."""
+    errors: ErrorNumbers = named("errors")
+    shape: dict[str, ShapeNumbers] = named("shape")
+    """Each test shape, by :func:`shape_key`."""
+
+
+# ---------------------------------------------------------------------------------------------
+# 1. The drag cue
+
+
+@dataclass(frozen=True)
+class DragCue:
+    """The first fall's vertical acceleration of every test throw, and one threshold on it."""
+
+    fall: np.ndarray
+    """(n_test,) m/s², from the first T frames (NaN where the fall is too short to fit)."""
+    y: np.ndarray
+    """(n_test,) the test labels: 0 light, 1 heavy."""
+    rule: dict[str, Any]
+    """The threshold rule on exact positions (``measure.best_threshold_rule``: threshold, direction, correct)."""
+    noisy: dict[float, Interval]
+    """Test accuracy of the same rule, refitted on positions with each tracker noise (millimetres)."""
+
+    @property
+    def exact(self) -> Interval:
+        """The rule's test accuracy on exact positions."""
+        return bootstrap_accuracy(self.rule["correct"])
+
+    @property
+    def median(self) -> dict[str, float]:
+        """Median fall acceleration of each class, m/s²."""
+        return drag_per_class(self.fall, self.y)
+
+
+def drag_cue(ds: data.Dataset, frames: int, contact_height: float, noise_mm: Sequence[float]) -> DragCue:
+    """The drag cue on the first ``frames`` of ``ds``: the threshold on the first fall's acceleration, fitted on
+    the training split, scored on the test split, on exact positions and with each noise of ``noise_mm``
+    (millimetres; 0 is skipped) drawn on both splits (seeds 1 and 2)."""
+
+    def fall(x: np.ndarray) -> np.ndarray:
+        return measure.fall_acceleration(x[:, :frames, 2], ds.fps, contact_height)
+
+    test = fall(ds.test.x)
+    rule = measure.best_threshold_rule(fall(ds.train.x), ds.train.y, test, ds.test.y)
+    noisy = {}
+    for mm in (m for m in noise_mm if m > 0):
+        ob = observe.Observation(noise=mm / 1000)
+        tr = ob.observe(ds.train.x[:, :frames], ds.fps, seed=1)
+        te = ob.observe(ds.test.x[:, :frames], ds.fps, seed=2)
+        r = measure.best_threshold_rule(fall(tr), ds.train.y, fall(te), ds.test.y)
+        noisy[mm] = bootstrap_accuracy(r["correct"])
+    return DragCue(test, np.asarray(ds.test.y), rule, noisy)
+
+
+def drag_per_class(a: np.ndarray, y: np.ndarray) -> dict[str, float]:
+    """Median fall acceleration (m/s^2) of each class, from :func:`study.simulate.measure.fall_acceleration`."""
+    return {c: float(np.nanmedian(a[np.asarray(y) == k])) for k, c in enumerate(("light", "heavy"))}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -84,7 +244,7 @@ def window_cues(dataset: data.Dataset, lengths: Sequence[float], contact_height:
         ends = [measure.first_contact(z) for z in xte[..., 2]]
         by = {r["feature"]: r for r in rules(dataset.train.x[:, :n], dataset.train.y, xte, dataset.test.y,
                                              dataset.fps, contact_height)}
-        drag = by.pop("fall_acceleration")
+        drag = by.pop(DRAG)
         other = max(by.values(), key=lambda r: r["test_accuracy"])
         rows.append({"length": float(length), "landed": float(np.mean([e is not None for e in ends])),
                      "drag": drag["interval"], "other": other["interval"], "other_feature": other["feature"]})
@@ -108,22 +268,127 @@ def ceiling(dataset: data.Dataset, with_mass: bool = False) -> Interval:
 
 
 # ---------------------------------------------------------------------------------------------
-# Robustness and errors
+# 3. Which cue carries each classifier
 
 
-def robustness(models: dict[str, Sequence[Any]], x: np.ndarray, y: np.ndarray, fps: float, frames: int,
-               sweeps: dict[str, tuple[str, Sequence[Any], Callable[[Any], observe.Observation]]],
-               seed: int = 0, rest_height: float = 0.1, high: tuple[np.ndarray, float] | None = None) -> list[dict]:
-    """Accuracy of each group of ``models`` under each point of each sweep: one row per (sweep, value,
-    group) with the interval over test trajectories and seeds.
+@dataclass(frozen=True)
+class Conditions:
+    """The peephole LSTM and the one-feature rules in the four conditions (a)-(d)."""
 
-    ``sweeps``: name -> (axis label, values, value -> Observation). ``high``: the same test trajectories
-    recorded at a higher frame rate (x, fps), for camera rates above ``fps``.
-    """
-    rows = []
-    for name, (label, values, make) in sweeps.items():
-        for value in values:
-            ob = make(value)
+    exact: Runs
+    """(a) Table 1's runs, exact positions with air, both inputs."""
+    air_off: Runs
+    """(b) the same configs on the same throws without air."""
+    faithful: list[TrainedModel]
+    """Table 1's Z models (trained on exact positions), one per seed."""
+    robust: list[TrainedModel]
+    """Z models trained on random observations, one per seed."""
+    correct: dict[tuple[Condition, Dims], np.ndarray]
+    """(S, n_test) bool per (condition, input): seed s got test throw i right ((c) and (d): Z only)."""
+    rules: dict[RuleCondition, list[dict]]
+    """The one-feature rules (:func:`rules`) of (a), (b) and (c) ((c) sees only a height)."""
+
+    @cached_property
+    def accuracy(self) -> dict[tuple[Condition, Dims], Interval]:
+        """Mean test accuracy per (condition, input), bootstrap over test throws and seeds."""
+        return {k: bootstrap_accuracy(v) for k, v in self.correct.items()}
+
+    def best_rule(self, c: RuleCondition) -> dict:
+        """The best one-feature rule of ``c``, chosen on the training split (``measure.best_rule``)."""
+        return measure.best_rule(self.rules[c])
+
+    def drag_rule(self, c: RuleCondition) -> dict:
+        """The drag rule of ``c``."""
+        return next(r for r in self.rules[c] if r["feature"] == DRAG)
+
+    def network_minus_rule(self, d: Dims) -> Interval:
+        """Without air: the network on ``d`` (mean of seeds) minus the best rule, paired on the test throws."""
+        return bootstrap_difference(self.air_off.where(dims=d).correct(), self.best_rule("b")["correct"])
+
+
+def condition_configs(runner: Runner, cfg: TrainConfig) -> list[tuple[Runner, list[TrainConfig], bool]]:
+    """The runs of (a), (b) and (d), as ``Runner.prefetch`` takes them (all at once keeps every core busy)."""
+    seeds = runner.preset.grid_seeds
+    both = paper.seed_configs(cfg, seeds, ("z", "xyz"))
+    return [(runner, both + paper.seed_configs(runner.randomised_config(cfg), seeds, ("z",)), True),
+            (runner.air_off(), both, True)]
+
+
+def conditions(runner: Runner, cfg: TrainConfig) -> Conditions:
+    """The four conditions at Table 1's ``cfg`` and the grid's seeds (trained once, then read from the cache)."""
+    ds, seeds = runner.dataset, runner.preset.grid_seeds
+    T, fps = cfg.n_frames(ds.fps), ds.fps
+    contact = runner.synth_config.shape.bounding_radius
+    runner.prefetch(condition_configs(runner, cfg), desc="conditions (a), (b), (d)")
+    exact = runner.train_runs(cfg, ("z", "xyz"), seeds, desc="(a)")
+    still = runner.air_off()  # the same throws, no air
+    air_off = still.train_runs(cfg, ("z", "xyz"), seeds, desc="(b)")
+    faithful = runner.models(cfg, seeds, dims="z")
+    rand_cfg = runner.randomised_config(cfg)
+    runner.train_runs(rand_cfg, ("z",), seeds, desc="(d)")
+    robust = runner.models(rand_cfg, seeds, dims="z")
+    calibrated = runner.observation()
+    x_obs, x_obs_train = runner.observed("test", calibrated, T), runner.observed("train", calibrated, T)
+
+    def observed_correct(models: list[TrainedModel]) -> np.ndarray:
+        return np.stack([m.predict_proba(x_obs).argmax(1) == ds.test.y for m in models])
+
+    correct: dict[tuple[Condition, Dims], np.ndarray] = {
+        ("a", "xyz"): exact.where(dims="xyz").correct(), ("a", "z"): exact.where(dims="z").correct(),
+        ("b", "xyz"): air_off.where(dims="xyz").correct(), ("b", "z"): air_off.where(dims="z").correct(),
+        ("c", "z"): observed_correct(faithful), ("d", "z"): observed_correct(robust)}
+    no_air = still.dataset
+    rule_sets: dict[RuleCondition, list[dict]] = {
+        "a": rules(ds.train.x[:, :T], ds.train.y, ds.test.x[:, :T], ds.test.y, fps, contact),
+        "b": rules(no_air.train.x[:, :T], no_air.train.y, no_air.test.x[:, :T], no_air.test.y, fps, contact),
+        "c": rules(observe.height_only(x_obs_train), ds.train.y, observe.height_only(x_obs), ds.test.y, fps,
+                   contact),
+    }
+    return Conditions(exact, air_off, faithful, robust, correct, rule_sets)
+
+
+# ---------------------------------------------------------------------------------------------
+# 4. Robustness
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """One parameter of the observation model, swept with the others at their exact values."""
+
+    label: str
+    """The axis label, with its unit."""
+    values: Sequence[Any]
+    """The values swept."""
+    make: Callable[[Any], observe.Observation]
+    """The observation at a value."""
+
+
+@dataclass(frozen=True)
+class Point:
+    """One group of Z models at one value of one sweep."""
+
+    sweep: str
+    """The sweep's name."""
+    value: Any
+    """The sweep's value."""
+    group: Group
+    """Which models."""
+    interval: Interval
+    """Mean test accuracy, bootstrap over test throws and seeds."""
+
+
+def robustness(models: Mapping[Group, Sequence[Any]], x: np.ndarray, y: np.ndarray, fps: float, frames: int,
+               sweeps: Mapping[str, Sweep], seed: int = ROBUSTNESS_SEED, rest_height: float = 0.1,
+               high: tuple[np.ndarray, float] | None = None) -> list[Point]:
+    """Accuracy of each group of ``models`` under each point of each sweep, on test trajectories ``x`` (n, T, 3)
+    metres at ``fps`` with labels ``y``, cut to ``frames`` after observing: one point per (sweep, value, group).
+
+    ``high``: the same test trajectories recorded at a higher frame rate (x, fps), for camera rates above
+    ``fps`` (without it those values are left out)."""
+    out = []
+    for name, sweep in sweeps.items():
+        for value in sweep.values:
+            ob = sweep.make(value)
             if ob.camera_fps is not None and ob.camera_fps > fps:
                 if high is None:
                     continue
@@ -131,16 +396,42 @@ def robustness(models: dict[str, Sequence[Any]], x: np.ndarray, y: np.ndarray, f
             else:
                 xo = ob.apply(x, fps, np.random.default_rng(seed), rest_height=rest_height)
             xo = xo[:, :frames]
-            for group, ms in models.items():
-                rows.append({"sweep": name, "label": label, "value": value, "group": group,
-                             "interval": scored(ms, xo, y)})
-    return rows
+            out += [Point(name, value, g, scored(ms, xo, y)) for g, ms in models.items()]
+    return out
 
 
-def by_parameter(rows: Sequence[dict], split: data.Split, name: str, bins: int = 8) -> list[dict]:
-    """Accuracy of the runs ``rows`` (each with ``correct``) against the test throws' parameter ``name``,
-    per class and in ``bins`` quantile bins of that class's values: one row per (class, bin)."""
-    correct = np.stack([r["correct"] for r in rows]).mean(axis=0)  # (n,) share of runs right
+def high_rate_test(preset: str, seed: int, seconds: float, fps: float = 120.0,
+                   data_dir: str | Path = "data") -> data.Dataset:
+    """The same test throws recorded at ``fps`` for ``seconds`` (a fast camera's view), one training throw
+    per class (the test split's random streams do not depend on the training split's size)."""
+    cfg = synth.SynthConfig.preset(preset).replace(fps=fps, duration=seconds + 2 / fps, n_train=1)
+    return synth.dataset(cfg, seed, data_dir=data_dir, progress=False)
+
+
+# ---------------------------------------------------------------------------------------------
+# 5. Where the errors fall
+
+
+@dataclass(frozen=True)
+class Bin:
+    """One quantile bin of one class's values of a throw parameter."""
+
+    label: int
+    """The class: 0 light, 1 heavy."""
+    index: int
+    """The bin, from the lowest values."""
+    centre: float
+    """Median of the parameter in the bin (its unit: restitution and friction none, mass kg)."""
+    accuracy: float
+    """Mean over the bin's throws of the share of runs that got the throw right."""
+    n: int
+    """Throws in the bin."""
+
+
+def by_parameter(correct: np.ndarray, split: data.Split, name: str, bins: int = 8) -> list[Bin]:
+    """Accuracy of runs against the test throws' parameter ``name``, per class and in ``bins`` quantile bins of
+    that class's values. ``correct``: (S, n) bool, run s got test throw i right."""
+    share = np.atleast_2d(correct).mean(axis=0)  # (n,) share of runs right
     out = []
     for label in (0, 1):
         sel = np.flatnonzero(np.asarray(split.y) == label)
@@ -150,13 +441,33 @@ def by_parameter(rows: Sequence[dict], split: data.Split, name: str, bins: int =
         for b in range(bins):
             m = which == b
             if m.any():
-                out.append({"class": label, "bin": b, "centre": float(np.median(v[m])),
-                            "accuracy": float(correct[sel][m].mean()), "n": int(m.sum())})
+                out.append(Bin(label, b, float(np.median(v[m])), float(share[sel][m].mean()), int(m.sum())))
     return out
 
 
+@dataclass(frozen=True)
+class Overlap:
+    """Accuracy inside and outside the restitutions both class priors allow."""
+
+    lo: float
+    """Lowest restitution of the light prior."""
+    hi: float
+    """Highest restitution of the heavy prior."""
+    inside: Interval
+    """Accuracy on throws with a restitution in [lo, hi]."""
+    outside: Interval
+    """Accuracy on the others."""
+
+
+def overlap(correct: np.ndarray, restitution: np.ndarray, prior: synth.SynthConfig) -> Overlap:
+    """:class:`Overlap` of runs ``correct`` (S, n) bool on test throws of restitution ``restitution`` (n,)."""
+    lo, hi = prior.light.restitution[0], prior.heavy.restitution[1]
+    inside = (restitution >= lo) & (restitution <= hi)
+    return Overlap(lo, hi, bootstrap_accuracy(correct[:, inside]), bootstrap_accuracy(correct[:, ~inside]))
+
+
 # ---------------------------------------------------------------------------------------------
-# Shapes
+# 6. Shapes
 
 
 SHAPES: dict[str, Shape] = {
@@ -170,6 +481,14 @@ SHAPES: dict[str, Shape] = {
 """The shapes the classifier is tested on; the mixed training set uses :data:`MIXED`."""
 MIXED = ("20 cm cube (trained)", "flat box 30 x 30 x 10 cm", "ball, 20 cm", "cylinder, 20 cm")
 """The shapes whose throws make up the mixed training set (the other two sizes of cube stay unseen)."""
+SHAPE_SEED_OFFSET = 7
+"""The shapes' data sets are simulated from the runner's data seed plus this."""
+
+
+def shape_key(name: str) -> str:
+    """A shape's name in the results file: ``"ball, 20 cm"`` -> ``"ball"``, ``"20 cm cube (trained)"`` ->
+    ``"20_cm_cube"``."""
+    return name.split(",")[0].split(" (")[0].replace(" ", "_")
 
 
 def shape_config(preset: str, shape: Shape, duration: float, n_train: int, n_test: int) -> synth.SynthConfig:
@@ -193,14 +512,261 @@ def mixed_shapes(sets: dict[str, data.Dataset], names: Sequence[str] = MIXED) ->
     return data.Dataset(train=train, test=parts[0].test, fps=parts[0].fps, meta={"key": key})
 
 
-def drag_per_class(a: np.ndarray, y: np.ndarray) -> dict[str, float]:
-    """Median fall acceleration (m/s^2) of each class, from :func:`study.simulate.measure.fall_acceleration`."""
-    return {c: float(np.nanmedian(a[np.asarray(y) == k])) for k, c in enumerate(("light", "heavy"))}
+@dataclass(frozen=True)
+class ShapeScore:
+    """Both groups of Z models on one test shape."""
+
+    name: str
+    """The shape, in words (a key of :data:`SHAPES`)."""
+    cube: Interval
+    """Table 1's Z models (trained on the 20 cm cube): mean test accuracy."""
+    mixed: Interval
+    """The Z models trained on mixed shapes."""
+
+    @property
+    def seen(self) -> bool:
+        """Whether the mixed training set holds this shape."""
+        return self.name in MIXED
 
 
-def high_rate_test(preset: str, seed: int, seconds: float, fps: float = 120.0,
-                   data_dir: str | Path = "data") -> data.Dataset:
-    """The same test throws recorded at ``fps`` for ``seconds`` (a fast camera's view), one training throw
-    per class (the test split's random streams do not depend on the training split's size)."""
-    cfg = synth.SynthConfig.preset(preset).replace(fps=fps, duration=seconds + 2 / fps, n_train=1)
-    return synth.dataset(cfg, seed, data_dir=data_dir, progress=False)
+def shape_scores(runner: Runner, cfg: TrainConfig, cube_models: Sequence[TrainedModel]) -> list[ShapeScore]:
+    """Table 1's Z models (``cube_models``) and Z models trained on :data:`MIXED` at ``cfg`` (the grid's
+    seeds), each tested on every shape of :data:`SHAPES`, the first T seconds."""
+    p, ds = runner.preset, runner.dataset
+    T = cfg.n_frames(ds.fps)
+    seed = int(ds.meta["seed"]) + SHAPE_SEED_OFFSET
+    sets = shape_sets(p.name, seed, T / ds.fps, p.shape_train, p.shape_test, data_dir=runner.data_dir)
+    shapes = runner.on(runner.saved(mixed_shapes(sets), "mixed"))  # workers read it
+    shapes.train_runs(cfg, ("z",), p.grid_seeds, desc="mixed")
+    mixed = shapes.models(cfg, p.grid_seeds, dims="z")
+    return [ShapeScore(name, scored(cube_models, sd.test.x[:, :T], sd.test.y), scored(mixed, sd.test.x[:, :T],
+                                                                                      sd.test.y))
+            for name, sd in sets.items()]
+
+
+# ---------------------------------------------------------------------------------------------
+# The chapter's result
+
+
+@dataclass(frozen=True)
+class Cues:
+    """Everything the chapter shows: its numbers (:attr:`numbers`), its tables and sentences, its figures' data."""
+
+    numbers: Numbers
+    """What the chapter reports (the results file's ``cues.*``)."""
+    drag: DragCue
+    """The drag cue (the headline figure draws it)."""
+    tracker: TrackerError
+    """The tracker's error on the rendered videos."""
+    conditions: Conditions
+    """The four conditions."""
+    sweeps: Mapping[str, Sweep]
+    """The robustness sweeps."""
+    points: tuple[Point, ...]
+    """Every point of every sweep (the robustness figure)."""
+    by_parameter: dict[tuple[str, Dims], list[Bin]]
+    """Table 1's accuracy against each of :data:`PARAMETERS`, per input (the errors figure)."""
+    overlap: Overlap
+    """Z accuracy inside and outside the priors' overlap in restitution."""
+    shapes: tuple[ShapeScore, ...]
+    """Every test shape."""
+    drag_noise_table: Table
+    """The drag rule under each tracker noise."""
+    cue_table: Table
+    """The network and the rules in each condition."""
+    shape_table: Table
+    """Both groups of models on every shape."""
+    n_videos: int
+    """Rendered videos the tracker was measured on."""
+    length_frames: int
+    """The frames every classifier of the chapter sees (Table 1's T)."""
+
+    # Sentences and numbers in the chapter's words ---------------------------------------------
+
+    @property
+    def fall_light(self) -> str:
+        """Median first-fall acceleration of the light test throws, m/s²."""
+        return f"{self.drag.median['light']:.2f}"
+
+    @property
+    def fall_heavy(self) -> str:
+        """The same for the heavy ones."""
+        return f"{self.drag.median['heavy']:.2f}"
+
+    @property
+    def noise_px(self) -> str:
+        """The tracker's error, pixels."""
+        return f"{self.tracker.noise_px:.2f}"
+
+    @property
+    def noise_mm(self) -> str:
+        """The tracker's error, millimetres."""
+        return f"{1000 * self.tracker.noise_m:.1f}"
+
+    @property
+    def mm_per_px(self) -> str:
+        """A pixel at the camera's distance, millimetres."""
+        return f"{1000 * self.tracker.metres_per_pixel:.1f}"
+
+    @property
+    def n_cal_frames(self) -> int:
+        """Frames the tracker measured."""
+        return self.tracker.n_frames
+
+    @property
+    def n_sweeps(self) -> int:
+        return len(self.sweeps)
+
+    @property
+    def overlap_range(self) -> str:
+        """The restitutions both priors allow, ``0.35–0.5``."""
+        return f"{self.overlap.lo:g}–{self.overlap.hi:g}"
+
+    @property
+    def ceil_gap(self) -> str:
+        """The exact ceiling minus the fitted estimate, points."""
+        c = self.numbers.ceiling
+        return f"{100 * (c.exact.value - c.restitution_friction.value):+.1f}"
+
+    @property
+    def cue_verdict(self) -> str:
+        """What taking the air away did, and whether the paper's claim survives it."""
+        acc = self.conditions.accuracy
+        carries = acc["b", "z"].hi < acc["a", "z"].lo
+        claims = {d: n.verdict for d, n in self.numbers.network_minus_rule_b.items()}
+        beaten = [d for d, v in claims.items() if v != "reproduced"]
+        return " ".join([
+            "Taking the air away changes the Z network's accuracy by " + _gap(acc["b", "z"], acc["a", "z"])
+            + " and the X, Y, Z network's by " + _gap(acc["b", "xyz"], acc["a", "xyz"])
+            + (": with air, the drag cue carried part of what the Z network did." if carries else
+               ": the Z network's accuracy does not rest on drag (its interval without air is not below the one "
+               "with)."),
+            f"Without air the drag rule is at {pct_ci(self.numbers.drag_rules['b'])}, as it must be: every object "
+            "falls at −g.",
+            "Without drag the networks still beat the best one-feature rule, so the paper's claim that the motion "
+            "pattern needs a learnt classifier survives the removal of the shortcut." if not beaten else
+            "Without drag the paper's network does not beat the best one-feature rule for "
+            + " and ".join(f"{paper.DIMS_NAMES[d]} ({claims[d]})" for d in beaten)
+            + ", so on our data the claim that no simple rule suffices does not survive the removal of the shortcut "
+            "for the paper's network (the chapter *What the motion allows* asks whether another learner does "
+            "better).",
+        ])
+
+    @property
+    def obs_verdict(self) -> str:
+        """Table 1's Z models through the calibrated tracker, and those trained on random observations."""
+        acc = self.conditions.accuracy
+        return (f"Observed through the calibrated tracker, Table 1's Z models score {pct_ci(acc['c', 'z'])} "
+                f"({_gap(acc['c', 'z'], acc['a', 'z'])} against exact positions); trained on random observations, "
+                f"{pct_ci(acc['d', 'z'])}.")
+
+
+def _gap(a: Interval, b: Interval) -> str:
+    return f"{100 * (a.value - b.value):+.1f} points"
+
+
+# ---------------------------------------------------------------------------------------------
+# Each part of the result
+
+
+def _condition_numbers(c: Conditions) -> tuple[dict[Condition, dict[Dims, Number]], dict[RuleCondition, Number],
+                                               dict[RuleCondition, Number]]:
+    conds: dict[Condition, dict[Dims, Number]] = {}
+    for (k, d), iv in c.accuracy.items():
+        conds.setdefault(k, {})[d] = number(iv, f"peephole LSTM, {CONDITIONS[k]}, {paper.DIMS_NAMES[d]}")
+    keys: tuple[RuleCondition, ...] = ("a", "b", "c")
+    best = {k: number(c.best_rule(k)["interval"], f"best one-feature rule ({c.best_rule(k)['feature']}), "
+                                                  f"{CONDITIONS[k]}") for k in keys}
+    drag = {k: number(c.drag_rule(k)["interval"], f"drag rule, {CONDITIONS[k]}") for k in keys}
+    return conds, best, drag
+
+
+def _cue_table(c: Conditions) -> Table:
+    rows = []
+    for k in CONDITIONS:
+        rule = k in c.rules
+        best = c.best_rule(k) if rule else None  # type: ignore[arg-type]
+        rows.append({"condition": CONDITIONS[k],
+                     "xyz": seeds_ci(c.correct[k, "xyz"]) if (k, "xyz") in c.correct else "—",
+                     "z": seeds_ci(c.correct[k, "z"]),
+                     "drag": pct_ci(c.drag_rule(k)["interval"]) if rule else "—",  # type: ignore[arg-type]
+                     "best": f"{pct_ci(best['interval'])} ({best['feature']})" if best else "—"})
+    return Table(rows, {"condition": "condition", "xyz": "peephole LSTM, X, Y, Z", "z": "peephole LSTM, Z only",
+                        "drag": "drag rule", "best": "best one-feature rule (feature)"})
+
+
+def _robustness_numbers(points: Sequence[Point], sweeps: Mapping[str, Sweep]) -> dict[str, Curve]:
+    curves: dict[str, dict[str, dict[Group, Number]]] = {}
+    for pt in points:
+        curves.setdefault(pt.sweep, {}).setdefault(f"{pt.value:g}", {})[pt.group] = number(
+            pt.interval, f"Z models {GROUPS[pt.group]}, {sweeps[pt.sweep].label} = {pt.value:g}")
+    return {name: Curve(v) for name, v in curves.items()}
+
+
+def _shape_numbers(shapes: Sequence[ShapeScore]) -> tuple[dict[str, ShapeNumbers], Table]:
+    numbers = {shape_key(s.name): ShapeNumbers(
+        number(s.cube, f"Z model trained on the 20 cm cube, tested on {s.name}"),
+        number(s.mixed, f"Z model trained on mixed shapes, tested on {s.name}")) for s in shapes}
+    rows = [{"shape": s.name, "cube": pct_ci(s.cube), "mix": pct_ci(s.mixed), "seen": "yes" if s.seen else "no"}
+            for s in shapes]
+    return numbers, Table(rows, {"shape": "test shape", "cube": "trained on the 20 cm cube [95 % CI]",
+                                 "mix": "trained on mixed shapes [95 % CI]", "seen": "in the mixed training set"})
+
+
+def compute(runner: Runner, noise_mm: Sequence[float], sweeps: Mapping[str, Sweep]) -> Cues:
+    """The chapter *What the network sees* on ``runner``'s preset and data set, every run cached: the drag rule
+    under each tracker noise of ``noise_mm`` (millimetres), the Z models under each of ``sweeps``."""
+    p, ds = runner.preset, runner.dataset
+    prior = runner.synth_config
+    cfg = runner.table1_config()
+    T = cfg.n_frames(ds.fps)  # the frames every classifier here sees
+    drag = drag_cue(ds, T, prior.shape.bounding_radius, noise_mm)
+    videos, _ = runner.rendered()
+    tracker = runner.tracker_error()
+    cond = conditions(runner, cfg)
+    high = high_rate_test(p.name, int(ds.meta["seed"]), T / ds.fps, data_dir=runner.data_dir)  # 120 fps
+    points = robustness({"exact": cond.faithful, "random": cond.robust}, ds.test.x, ds.test.y, ds.fps, T, sweeps,
+                        high=(high.test.x, high.fps))
+    by = {(name, d): by_parameter(cond.exact.where(dims=d).correct(), ds.test, name)
+          for name in PARAMETERS for d in ("xyz", "z")}
+    errors = overlap(cond.correct["a", "z"], ds.test.params["restitution"], prior)
+    shapes = shape_scores(runner, cfg, cond.faithful)
+    return assemble(drag, tracker, cond, (ceiling(ds), ceiling(ds, with_mass=True)),
+                    exact_ceiling(prior, ("restitution", "friction")), sweeps, points, by, errors, shapes,
+                    n_videos=len(videos), length_frames=T)
+
+
+def assemble(drag: DragCue, tracker: TrackerError, cond: Conditions, fitted: tuple[Interval, Interval],
+             exact: float, sweeps: Mapping[str, Sweep], points: Sequence[Point],
+             by: dict[tuple[str, Dims], list[Bin]], errors: Overlap, shapes: Sequence[ShapeScore], *,
+             n_videos: int, length_frames: int) -> Cues:
+    """The chapter's result from its parts (what :func:`compute` measured): its numbers, verdicts and tables.
+    ``fitted``: the fitted ceiling without and with the mass (:func:`ceiling`); ``exact``: the exact one."""
+    conds, best, drag_rules = _condition_numbers(cond)
+    over_rule = {d: cond.network_minus_rule(d) for d in ("xyz", "z")}
+    claims = {d: verdicts.order(iv, +1) for d, iv in over_rule.items()}  # the network above the rule
+    shape_numbers, shape_table = _shape_numbers(shapes)
+    numbers = Numbers(
+        DragRuleNumbers(number(drag.exact, "one threshold on the first fall's acceleration, exact positions"),
+                        {f"{mm}": number(iv, f"the drag rule with {mm} mm of tracker noise")
+                         for mm, iv in drag.noisy.items()}),
+        TrackerNumbers(number(tracker.noise_m, "tracker's vertical error (std after removing the offset)", unit="m"),
+                       number(tracker.drop, "share of frames the tracker lost on rendered video")),
+        conds, best, drag_rules,
+        CeilingNumbers(
+            number(fitted[0], "an estimate on the test split: logistic regression on the true restitution and "
+                              "friction"),
+            number(fitted[1], "the same estimate, told the true mass too"),
+            number(exact, "exact ceiling of the priors on the true restitution and friction")),
+        {d: number(iv, f"network minus the best rule without air, {paper.DIMS_NAMES[d]}", decision=claims[d],
+                   signed=True) for d, iv in over_rule.items()},
+        Verdict(verdicts.combined(list(claims.values())),
+                "without drag, the network beats every one-feature rule (the paper's 'no simple rule')"),
+        _robustness_numbers(points, sweeps),
+        ErrorNumbers(number(errors.inside, "Z accuracy on throws whose restitution lies where the priors overlap"),
+                     number(errors.outside, "Z accuracy on the other throws")),
+        shape_numbers)
+    drag_table = Table([{"noise": f"{mm} mm", "acc": pct_ci(iv)} for mm, iv in drag.noisy.items()],
+                       {"noise": "tracker error (standard deviation)", "acc": "drag rule, test accuracy [95 % CI]"})
+    return Cues(numbers, drag, tracker, cond, sweeps, tuple(points), by, errors, tuple(shapes), drag_table,
+                _cue_table(cond), shape_table, n_videos=n_videos, length_frames=length_frames)

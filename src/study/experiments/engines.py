@@ -1,32 +1,120 @@
-"""Another engine: the same throws simulated in Bullet (the paper's engine, through Blender) and in MuJoCo.
+"""The chapter *Another engine*: the same throws simulated in Bullet (the paper's engine, through Blender) and in
+MuJoCo.
 
-Both data sets hold the same sampled objects and launches, index by index, without air. This module compares
-them throw by throw (:func:`agreement`) and asks whether what a learner learns in one engine holds in the
-other (:func:`cross_cells`): every learner trained on one engine's training split and tested on both engines'
-test splits, exact and through the calibrated tracker.
+Both data sets hold the same sampled objects and launches, index by index, without air. :func:`compute` checks
+Bullet as MuJoCo is checked (:func:`bullet_checks`), compares the engines throw by throw (:func:`agreement`),
+asks whether what a learner learns in one engine holds in the other (:func:`cross_entries`: every learner
+trained on one engine's training split and tested on both engines' test splits, exact and through the
+calibrated tracker), and trains Table 1's faithful row in each engine; it returns :class:`AnotherEngine`, whose
+:class:`Numbers` are what the chapter reports (``engine.table1.xyz.paper_way`` and so on).
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from functools import cached_property
+from typing import Literal, get_args
 
 import numpy as np
 
-from study.experiments import motion
-from study.learn.config import TrainConfig
+from study import CLASSES
+from study.experiments import ceiling, motion, paper, stats, verdicts
+from study.experiments.reported import Number, Reported, number
+from study.experiments.runner import Runner
+from study.experiments.runtable import Runs
+from study.experiments.text import Table, pct, pct_ci, points, seeds_ci
+from study.experiments.tracker import TrackerError
+from study.learn.config import Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
-from study.simulate import measure
-from study.simulate.data import Dataset
+from study.simulate import bullet, measure, observe, synth
+from study.simulate.synth import ENGINES, Engine, SynthConfig
 
-ENGINES = ("mujoco", "bullet")
-"""The engines compared, the study's first."""
-LEARNERS = ("lstm_positions", "lstm_velocity", "minirocket", "rule")
-"""The learners of the cross-engine table."""
-AGREEMENT = {"bounces": "bounces", "time_to_rest": "time to rest, s", "first_rebound": "first rebound's height, m",
-             "distance": "horizontal distance, m"}
+Learner = Literal["peephole_positions", "peephole_velocity", "minirocket", "rule"]
+"""The learners of the cross-engine table (named as in ``study.experiments.motion``)."""
+Network = Literal["peephole_positions", "peephole_velocity"]
+"""Its networks."""
+View = Literal["exact", "calibrated"]
+"""How the positions are seen (``motion.Column.name``)."""
+Pair = Literal["mujoco_to_mujoco", "mujoco_to_bullet", "bullet_to_mujoco", "bullet_to_bullet"]
+"""A training engine and a test engine."""
+Feature = Literal["bounces", "time_to_rest", "first_rebound", "distance"]
 """What :func:`agreement` compares, throw by throw."""
+ClassName = Literal["light", "heavy"]
+"""``study.CLASSES``."""
+
+LEARNERS: tuple[Learner, ...] = get_args(Learner)
+NETWORKS: tuple[Network, ...] = get_args(Network)
+VIEWS: tuple[View, ...] = get_args(View)
+NAMES: dict[Learner, str] = {name: motion.NAMES[name] for name in LEARNERS}
+"""Each learner in words."""
+AGREEMENT: dict[Feature, str] = {"bounces": "bounces", "time_to_rest": "time to rest, s",
+                                 "first_rebound": "first rebound's height, m", "distance": "horizontal distance, m"}
+"""What :func:`agreement` compares, in words."""
+UNITS: dict[Feature, str] = {"bounces": "count", "time_to_rest": "s", "first_rebound": "m", "distance": "m"}
+"""The unit of each difference of :data:`AGREEMENT`."""
+CONDITIONS: dict[View, str] = {"exact": "exact", "calibrated": "calibrated tracker"}
+"""Each view in a table's rows."""
+
+FLIGHT_QPOS = np.array([0.0, 0.0, 13.0, 0.9, 0.1, 0.3, 0.3])
+"""The free-flight check's launch: 13 m up (it never lands within the second), a unit quaternion (w, x, y, z)."""
+FLIGHT_QVEL = np.array([1.0, -0.5, 2.0, 3.0, -2.0, 1.0])
+"""Its velocity, m/s, and spin, rad/s."""
+DROPS = (0.6, 1.0, 1.4)
+"""Heights of the flat-drop check, metres."""
+REST_SPEED = 0.05
+"""The speed below which the figure calls a throw at rest, m/s."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Bullet checked as MuJoCo is
+
+
+@dataclass(frozen=True)
+class BulletChecks:
+    """What the chapter's figure of Bullet's checks draws."""
+
+    flight_t: np.ndarray
+    """(k,) s: the free flight's times."""
+    flight_error: np.ndarray
+    """(k,) m: its distance from the analytic parabola."""
+    restitution: np.ndarray
+    """(r,) the restitutions asked for, across both priors."""
+    rebound: dict[float, np.ndarray]
+    """Drop height (m) -> (r,) the measured sqrt(h1 / h0) of a flat drop."""
+    friction: np.ndarray
+    """(f,) the frictions asked for, across both priors."""
+    deceleration: np.ndarray
+    """(f,) the measured deceleration of a slide over g."""
+    speeds: tuple[tuple[np.ndarray, np.ndarray, int], ...]
+    """Throws of both classes coming to rest: (t (k,) s, speed (k,) m/s, label) each."""
+
+
+def bullet_checks(prior: SynthConfig) -> BulletChecks:
+    """Bullet's free flight, flat drops, slide and coming to rest under ``prior`` without air (the tests assert
+    what these show)."""
+    still = prior.replace(air=False)
+    pos, _ = bullet.flight(still, FLIGHT_QPOS, FLIGHT_QVEL, 1.0)
+    t = bullet.TIMESTEP * np.arange(1, len(pos) + 1)
+    exact = FLIGHT_QPOS[:3] + FLIGHT_QVEL[:3] * t[:, None] - [0, 0, synth.GRAVITY / 2] * t[:, None] ** 2
+    e = np.linspace(min(prior.light.restitution[0], prior.heavy.restitution[0]),
+                    max(prior.light.restitution[1], prior.heavy.restitution[1]), 9)
+    rebound = {}
+    for drop in DROPS:
+        h = bullet.flat_drops(prior.shape, bullet.restitution_setting(e, prior.shape), drop)
+        rebound[drop] = np.sqrt(h[:, 1] / h[:, 0])
+    mu = np.linspace(min(prior.light.friction[0], prior.heavy.friction[0]),
+                     max(prior.light.friction[1], prior.heavy.friction[1]), 7)
+    slowing = bullet.slide_deceleration(prior.shape, bullet.friction_setting(mu, prior.shape))
+    params = synth.sample_split(prior.replace(n_train=3, air=False), 0, "train")
+    traces = [bullet.trace(still, params, i, duration=6.0) for i in range(len(params["mass"]))]
+    return BulletChecks(t, np.linalg.norm(pos - exact, axis=1), e, rebound, mu, slowing / synth.GRAVITY,
+                        tuple((tr.t, tr.speed, int(params["label"][i])) for i, tr in enumerate(traces)))
+
+
+# ---------------------------------------------------------------------------------------------
+# Throw by throw
 
 
 def first_rebound(z: np.ndarray, rest_height: float) -> np.ndarray:
@@ -40,7 +128,7 @@ def first_rebound(z: np.ndarray, rest_height: float) -> np.ndarray:
     return out
 
 
-def agreement(a: np.ndarray, b: np.ndarray, fps: float, rest_height: float) -> dict[str, np.ndarray]:
+def agreement(a: np.ndarray, b: np.ndarray, fps: float, rest_height: float) -> dict[Feature, np.ndarray]:
     """Per throw, ``b`` minus ``a`` (two engines' trajectories of the same throws, (n, T, 3) metres) for each
     summary of :data:`AGREEMENT`: name -> (n,) differences."""
     fa, fb = measure.features(a, fps), measure.features(b, fps)
@@ -49,64 +137,86 @@ def agreement(a: np.ndarray, b: np.ndarray, fps: float, rest_height: float) -> d
     return {k: out[k] for k in AGREEMENT}
 
 
-@dataclass
+# ---------------------------------------------------------------------------------------------
+# Across engines
+
+
+def configs(runner: Runner) -> dict[Network, TrainConfig]:
+    """The networks' configurations: the paper's network at Table 1's point, and the same fed velocity at its own
+    grid's point."""
+    return {"peephole_positions": runner.table1_config(), "peephole_velocity": runner.table1_config("velocity")}
+
+
+def columns(tracker: TrackerError) -> list[motion.Column]:
+    """The conditions of the cross-engine table: air off, exact and through the calibrated tracker."""
+    return [c for c in motion.columns(tracker) if not c.air and c.name in VIEWS]
+
+
+def plan(runners: Mapping[Engine, Runner], cfgs: Mapping[Network, TrainConfig], cols: Sequence[motion.Column],
+         seeds: tuple[int, ...], table1_seeds: tuple[int, ...]) -> list[tuple[Runner, list[TrainConfig], bool]]:
+    """Every network run of the chapter, as ``Runner.prefetch`` takes them: the cross-engine networks in each
+    engine and column, and Table 1's positions network on X, Y, Z and Z with ``table1_seeds``."""
+    table1 = [dataclasses.replace(cfgs["peephole_positions"], dims=d, seed=s) for d in ("z", "xyz")
+              for s in table1_seeds]
+    return [(r, [dataclasses.replace(motion.trained_config(cfgs[n], c), seed=s)
+                 for c in cols for n in NETWORKS for s in seeds] + table1, True)
+            for r in runners.values()]
+
+
+@dataclass(frozen=True, eq=False)
 class Cross:
     """One learner trained on one engine and tested on one engine's test split, in one condition."""
 
-    learner: str
-    train: str
-    test: str
+    learner: Learner
+    train: Engine
+    test: Engine
     column: motion.Column
     correct: np.ndarray
-    """(S, n) bool: seed s got test throw i right."""
+    """(S, n) bool: seed s got test throw i right (S = 1 for the rule)."""
     failed: int = 0
+    """Seeds that failed to train."""
 
-    @property
+    @cached_property
     def interval(self) -> Interval:
+        """Mean test accuracy with its bootstrap interval over the test throws and the seeds."""
         return bootstrap_accuracy(self.correct)
 
 
-def cross_cells(runners: dict[str, Any], cfgs: dict[str, TrainConfig], column: motion.Column,
-                seeds: tuple[int, ...], contact_height: float) -> list[Cross]:
+def cross_entries(runners: Mapping[Engine, Runner], cfgs: Mapping[Network, TrainConfig], column: motion.Column,
+                  seeds: tuple[int, ...], contact_height: float) -> list[Cross]:
     """Every learner of :data:`LEARNERS`, trained on each engine (``runners``: engine -> the runner on its data
     set) under ``column``'s condition and tested on every engine's test split the same way."""
-    T = cfgs["lstm_positions"].n_frames(next(iter(runners.values())).fps)
+    T = cfgs["peephole_positions"].n_frames(next(iter(runners.values())).fps)
     data = {e: column.inputs(r.dataset, T) for e, r in runners.items()}  # the same noise in both engines
     y = {e: np.asarray(r.dataset.test.y) for e, r in runners.items()}
+    tests = {e: x for e, (_, x) in data.items()}
     out = []
     for train_engine, runner in runners.items():
-        for name in ("lstm_positions", "lstm_velocity"):
+        for name in NETWORKS:
             cfg = motion.trained_config(cfgs[name], column)
-            rows = runner.train_runs(cfg, ("z",), seeds, desc=f"{train_engine} {name}")
+            runs = runner.train_runs(cfg, ("z",), seeds, desc=f"{train_engine} {name}")
             models = runner.models(cfg, seeds, dims="z")
-            for test_engine, (_, x_test) in data.items():
+            for test_engine, x_test in tests.items():
                 correct = np.stack([m.predict_proba(x_test).argmax(1) == y[test_engine] for m in models])
-                out.append(Cross(name, train_engine, test_engine, column, correct, sum(r["failed"] for r in rows)))
+                out.append(Cross(name, train_engine, test_engine, column, correct, runs.n_failed))
         x_train = data[train_engine][0]
-        tests = {e: x for e, (_, x) in data.items()}
         labels = [runner.rocket("z", T, s, tests, train_x=None if column.noise is None else x_train) for s in seeds]
-        for test_engine in data:
+        for test_engine in tests:
             out.append(Cross("minirocket", train_engine, test_engine, column,
                              np.stack([lab[test_engine] == y[test_engine] for lab in labels])))
-        z_only = lambda x: np.concatenate([np.zeros_like(x[..., :2]), x[..., 2:]], axis=-1)  # noqa: E731
-        f_train = measure.features(z_only(x_train), runner.fps, contact_height)
-        fits = {k: measure.best_threshold_rule(f_train[k], runner.dataset.train.y, f_train[k], runner.dataset.train.y)
-                for k in motion.RULE_FEATURES}
-        best = max(fits, key=lambda k: fits[k]["train_accuracy"])  # chosen on the training engine's split
-        rule = fits[best]
-        for test_engine, (_, x_test) in data.items():
-            f = measure.features(z_only(x_test), runner.fps, contact_height)[best]
-            f = np.where(np.isfinite(f), f, np.nanmedian(f_train[best]))
-            pred = f > rule["threshold"] if rule["direction"] == ">" else f <= rule["threshold"]
-            out.append(Cross("rule", train_engine, test_engine, column, (pred == (y[test_engine] == 1))[None]))
+        ds = runner.dataset
+        for test_engine, x_test in tests.items():  # the rule chosen on the training engine's split
+            rules = measure.simple_rules(observe.height_only(x_train), ds.train.y, observe.height_only(x_test),
+                                         y[test_engine], ds.fps, contact_height, motion.RULE_FEATURES)
+            out.append(Cross("rule", train_engine, test_engine, column, measure.best_rule(rules)["correct"][None]))
     return out
 
 
-def transfer(cells: list[Cross], learner: str, column: motion.Column) -> dict[str, Interval]:
+def transfer(entries: Sequence[Cross], learner: Learner, column: motion.Column) -> dict[Engine, Interval]:
     """What ``learner`` loses when the test engine is not its training engine, in ``column``: for each training
     engine, the accuracy on the other engine minus that on its own (paired on the same throws), with a
     bootstrap interval."""
-    by = {(c.train, c.test): c for c in cells if c.learner == learner and c.column == column}
+    by = {(c.train, c.test): c for c in entries if c.learner == learner and c.column == column}
     out = {}
     for e in ENGINES:
         other = next(o for o in ENGINES if o != e)
@@ -115,11 +225,218 @@ def transfer(cells: list[Cross], learner: str, column: motion.Column) -> dict[st
     return out
 
 
-def plan(runners: dict[str, Any], cfgs: dict[str, TrainConfig], cols: list[motion.Column], seeds: tuple[int, ...],
-         table1_seeds: tuple[int, ...]) -> list[tuple[Any, list[TrainConfig], bool]]:
-    """Every network run of the chapter, as ``Runner.prefetch`` takes them: the cross-engine networks in each
-    engine and column, and Table 1's positions network on X, Y, Z and Z with ``table1_seeds``."""
-    table1 = [dataclasses.replace(cfgs["lstm_positions"], dims=d, seed=s) for d in ("z", "xyz") for s in table1_seeds]
-    return [(r, [dataclasses.replace(motion.trained_config(cfgs[n], c), seed=s)
-                 for c in cols for n in ("lstm_positions", "lstm_velocity") for s in seeds] + table1, True)
-            for r in runners.values()]
+Outcome = Literal["transfers", "loses", "unclear"]
+"""What the intervals of :func:`transfer` say of a learner that changes engine."""
+
+
+def outcome(diffs: Mapping[Engine, Interval], delta: float = verdicts.MARGIN.delta) -> Outcome:
+    """Whether a learner transfers: every difference of :func:`transfer` inside the book's margin ``delta`` either
+    way; or loses: one wholly below ``-delta``; else the intervals cannot say."""
+    if all(-delta < d.lo and d.hi < delta for d in diffs.values()):
+        return "transfers"
+    if any(d.hi < -delta for d in diffs.values()):
+        return "loses"
+    return "unclear"
+
+
+# ---------------------------------------------------------------------------------------------
+# What the chapter reports
+
+
+@dataclass(frozen=True)
+class Table1Row(Reported):
+    """One row of Table 1 in one engine."""
+
+    paper_way: Number
+    """The run validation picks (one data set: the bootstrap of that run); in Bullet, against the paper's."""
+    mean: Number
+    """The mean over the seeds."""
+
+
+@dataclass(frozen=True)
+class Numbers(Reported):
+    """Every number the chapter *Another engine* reports."""
+
+    CHAPTER = "engine"
+    agreement: dict[Feature, dict[ClassName, Number]]
+    """Median of Bullet minus MuJoCo per throw, by class."""
+    cross: dict[Learner, dict[View, dict[Pair, Number]]]
+    """Each learner trained in one engine and tested in another (``mujoco_to_bullet``)."""
+    ceiling: Number
+    """The exact ceiling of the priors (both engines: the same draws)."""
+    transfer: dict[Learner, dict[View, dict[Engine, Number]]]
+    """Trained in an engine: the other engine's accuracy minus its own."""
+    table1: dict[Dims, Table1Row]
+    """Table 1 in Bullet, the paper's engine."""
+    table1_mujoco_air_off: dict[Dims, Table1Row]
+    """Table 1 in MuJoCo on the same throws without air."""
+
+
+def agreement_numbers(diff: Mapping[Feature, np.ndarray],
+                      y: np.ndarray) -> tuple[dict[Feature, dict[ClassName, Number]], Table]:
+    """The median difference of each summary of :func:`agreement` (``diff``) by class (``y`` (n,) the labels),
+    and the table of its spread."""
+    out: dict[Feature, dict[ClassName, Number]] = {}
+    rows = []
+    for k, label in AGREEMENT.items():
+        for c, name in enumerate(CLASSES):
+            d = diff[k][y == c]
+            iv = stats.bootstrap_mean(d)
+            out.setdefault(k, {})[name] = number(float(np.median(d)), f"median of Bullet minus MuJoCo, {label}, {name}",
+                                                 unit=UNITS[k])  # type: ignore[index]
+            rows.append({"what": label, "class": name, "median": f"{np.median(d):+.3g}",
+                         "iqr": f"{np.percentile(d, 25):+.3g} to {np.percentile(d, 75):+.3g}",
+                         "mean": f"{iv.value:+.3g} [{iv.lo:+.3g}, {iv.hi:+.3g}]",
+                         "same": f"{100 * np.mean(np.abs(d) < 1e-9):.0f} %" if k == "bounces" else "—"})
+    return out, Table(rows, {"what": "Bullet minus MuJoCo, per throw", "class": "class", "median": "median",
+                             "iqr": "interquartile range", "mean": "mean [95 % CI]", "same": "same count"})
+
+
+def _find(entries: Sequence[Cross], learner: Learner, column: motion.Column, train: Engine, test: Engine) -> Cross:
+    return next(x for x in entries if x.learner == learner and x.column == column and x.train == train
+                and x.test == test)
+
+
+def cross_numbers(entries: Sequence[Cross], cols: Sequence[motion.Column],
+                  length: float) -> tuple[dict[Learner, dict[View, dict[Pair, Number]]], Table]:
+    """Every learner trained in each engine and tested in each, and the table of them."""
+    out: dict[Learner, dict[View, dict[Pair, Number]]] = {}
+    rows = []
+    for c in cols:
+        for name in LEARNERS:
+            row = {"learner": NAMES[name], "cond": CONDITIONS[c.name]}  # type: ignore[index]
+            for tr in ENGINES:
+                for te in ENGINES:
+                    x = _find(entries, name, c, tr, te)
+                    out.setdefault(name, {}).setdefault(c.name, {})[f"{tr}_to_{te}"] = number(  # type: ignore[index]
+                        x.interval, f"{NAMES[name]}, trained in {tr}, tested in {te}, {c.label}", failed=x.failed)
+                    row[f"{tr}_{te}"] = seeds_ci(x.correct) + (f"; {x.failed} failed" if x.failed else "")
+            rows.append(row)
+    heads = {"learner": f"learner (Z, {length:g} s)", "cond": "positions",
+             **{f"{tr}_{te}": f"trained {tr}, tested {te}" for tr in ENGINES for te in ENGINES}}
+    return out, Table(rows, heads)
+
+
+OUTCOME_WORDS: dict[Outcome, str] = {
+    "transfers": "it transfers: within the book's margin of {delta} points either way",
+    "loses": "it loses more than that margin",
+    "unclear": "whether it loses more than the margin, the intervals cannot say"}
+"""What each :data:`Outcome` says, in the transfer table."""
+
+
+def transfer_numbers(entries: Sequence[Cross], cols: Sequence[motion.Column]) -> tuple[
+        dict[Learner, dict[View, dict[Engine, Number]]], Table, dict[tuple[Learner, View], Outcome]]:
+    """What each learner loses when the engine changes, its table, and each (learner, view)'s outcome."""
+    out: dict[Learner, dict[View, dict[Engine, Number]]] = {}
+    rows, outcomes = [], {}
+    delta = verdicts.MARGIN.delta
+    for c in cols:
+        for name in LEARNERS:
+            t = transfer(entries, name, c)
+            out.setdefault(name, {})[c.name] = {  # type: ignore[index]
+                tr: number(dv, f"{NAMES[name]} trained in {tr}: the other engine minus its own, {c.label}", signed=True)
+                for tr, dv in t.items()}
+            outcomes[name, c.name] = o = outcome(t, delta)
+            rows.append({"learner": NAMES[name], "cond": CONDITIONS[c.name],  # type: ignore[index]
+                         **{tr: points(dv) for tr, dv in t.items()},
+                         "says": OUTCOME_WORDS[o].format(delta=f"{100 * delta:g}")})
+    heads = {"learner": "learner", "cond": "positions",
+             **{e: f"trained in {e}: in the other engine, minus in its own" for e in ENGINES}, "says": "does it transfer?"}
+    return out, Table(rows, heads), outcomes  # type: ignore[return-value]
+
+
+def table1_numbers(in_engine: Mapping[Engine, Runs]) -> tuple[dict[Engine, dict[Dims, Table1Row]], Table]:
+    """Table 1 in each engine: the run validation picks (``stats.validation_pick``, over one data set) and the
+    mean over the seeds, each row of X, Y, Z and of Z; in Bullet, against the paper's numbers."""
+    out: dict[Engine, dict[Dims, Table1Row]] = {}
+    rows = []
+    for d, dname in paper.DIMS_NAMES.items():
+        row = {"dims": dname, "paper": pct(paper.TABLE1[d], 0)}
+        for e, runs in in_engine.items():
+            runs_d = runs.where(dims=d)
+            pick = stats.validation_pick([runs_d])
+            paper_way = number(pick.interval, f"Table 1 in {e}, air off: the run validation picks, {dname}",
+                               paper=paper.TABLE1[d] if e == "bullet" else None, seed=pick.picked[0].seed)
+            mean = number(stats.summary(runs_d).interval,  # type: ignore[arg-type]
+                          f"Table 1 in {e}, air off: mean over {len(runs_d)} seeds, {dname}")
+            out.setdefault(e, {})[d] = Table1Row(paper_way, mean)
+            row[e] = f"{pct_ci(pick.interval)}; mean {seeds_ci(runs_d.correct())}"
+            if e == "bullet":
+                row["verdict"] = f"**{paper_way.verdict}**"
+        rows.append(row)
+    return out, Table(rows, {
+        "dims": "trajectory dimension(s)", "paper": "paper (Blender, i.e. Bullet)",
+        "mujoco": "MuJoCo, air off: the run validation picks; mean of seeds [95 % CI]; t-interval; each seed",
+        "bullet": "Bullet: the same", "verdict": "paper vs Bullet"})
+
+
+# ---------------------------------------------------------------------------------------------
+# The chapter's result
+
+
+@dataclass(frozen=True)
+class AnotherEngine:
+    """Everything the chapter shows: its numbers (:attr:`numbers`), its tables and sentences, its figures' data."""
+
+    numbers: Numbers
+    """What the chapter reports (the results file's ``engine.*``)."""
+    bullet_setup: str
+    """How Bullet is set up, in words (``study.simulate.bullet.DESCRIPTION``)."""
+    checks: BulletChecks
+    """Bullet checked as MuJoCo is."""
+    agreement: dict[Feature, np.ndarray]
+    """Per test throw, Bullet minus MuJoCo: name -> (n,)."""
+    test_y: np.ndarray
+    """(n,) the test throws' labels."""
+    columns: tuple[motion.Column, ...]
+    """The cross-engine conditions."""
+    configs: dict[Network, TrainConfig]
+    """The networks' configurations."""
+    entries: tuple[Cross, ...]
+    """Every learner, training engine, test engine and condition."""
+    outcomes: dict[tuple[Learner, View], Outcome]
+    """Whether each learner transfers, in each condition."""
+    in_engine: dict[Engine, Runs]
+    """Table 1's runs in each engine."""
+    agree_table: Table
+    cross_table: Table
+    transfer_table: Table
+    engine_table1: Table
+    n_seeds: int
+    """Seeds of each cross-engine network."""
+
+    @property
+    def transfer_summary(self) -> str:
+        """How many learners transfer, in one sentence."""
+        n = {o: sum(v == o for v in self.outcomes.values()) for o in get_args(Outcome)}
+        return (f"Of {len(self.outcomes)} learners and conditions, {n['transfers']} transfer within the book's margin "
+                f"of {100 * verdicts.MARGIN.delta:g} points either way, {n['loses']} lose more than that, and for "
+                f"{n['unclear']} the intervals cannot say.")
+
+
+def compute(runner: Runner, tracker: TrackerError | None = None) -> AnotherEngine:
+    """The chapter *Another engine* on ``runner``'s throws, without air, in each engine of ``synth.ENGINES``: every
+    network run at once, then the checks, the agreement, the cross-engine table and Table 1 in each engine.
+
+    ``tracker``: the tracker's error (default ``runner.tracker_error()``, measured on the rendered throws)."""
+    runners = {e: runner.in_engine(e) for e in ENGINES}
+    prior, p = runner.synth_config, runner.preset
+    mj, bt = (runners[e].dataset for e in ENGINES)
+    cols = columns(runner.tracker_error() if tracker is None else tracker)
+    cfgs = configs(runner)
+    runner.prefetch(plan(runners, cfgs, cols, p.grid_seeds, p.seeds), desc="both engines")
+    diff = agreement(mj.test.x, bt.test.x, mj.fps, prior.shape.rest_height)
+    y = np.asarray(mj.test.y)
+    agree, agree_table = agreement_numbers(diff, y)
+    entries = tuple(x for c in cols
+                    for x in cross_entries(runners, cfgs, c, p.grid_seeds, prior.shape.bounding_radius))
+    cross, cross_table = cross_numbers(entries, cols, cfgs["peephole_positions"].length)
+    moved, transfer_table, outcomes = transfer_numbers(entries, cols)
+    in_engine = {e: r.seed_runs(cfgs["peephole_positions"]) for e, r in runners.items()}
+    table1, engine_table1 = table1_numbers(in_engine)
+    exact = number(ceiling.exact_ceiling(prior, motion.AIR_OFF_PARAMETERS),
+                   "exact ceiling of the priors (both engines: the same draws)")
+    numbers = Numbers(agree, cross, exact, moved, table1["bullet"], table1["mujoco"])
+    return AnotherEngine(numbers, bullet.DESCRIPTION, bullet_checks(prior), diff, y, tuple(cols), cfgs, entries,
+                         outcomes, in_engine, agree_table, cross_table, transfer_table, engine_table1,
+                         len(p.grid_seeds))

@@ -1,34 +1,72 @@
-"""What the motion allows: every learner, trained and tested under each camera, against the exact ceiling.
+"""The chapter *What the motion allows*: every learner, trained and tested under each camera, against the exact
+ceiling of the priors.
 
-The table of the chapter "What the motion allows" has a row per learner and a column per condition: the air
-on or off, and the positions exact or observed by a camera whose error is one pixel of a 1080-row camera at
-4 m, the tracker's calibrated error, or one pixel of the same camera at 55 m (with the calibrated share of
-lost frames in every observed column). Each learner is trained on the condition it is tested on:
+The chapter's table has a row per learner and a column per condition (:class:`Column`): the air on or off, and
+the positions exact or observed by a camera whose error is one pixel of a 1080-row camera at 4 m, the tracker's
+calibrated error, or one pixel of the same camera at 55 m (with the calibrated share of lost frames in every
+observed column). Each learner is trained on the condition it is tested on:
 
 - the networks (:data:`NETWORKS`) with ``TrainConfig.observe = 'fixed'`` at the column's noise (a fresh draw
-  every epoch; validation observed the same way), three seeds or more;
+  every epoch; validation observed the same way), over the preset's grid seeds;
 - MiniRocket on one observed draw of the training split, once per seed;
 - the physics baseline and the best one-feature rule fitted once on that draw;
 
 and one more row, Table 1's network trained on exact positions and tested observed. Every learner of a
 column is scored on the same observed test trajectories (one seeded draw per column), so two learners
 compare paired. Z only (what one camera gives), the first T seconds of Table 1.
+
+:func:`compute` runs it all on a runner (every run cached) and returns :class:`Motion`; :class:`Numbers` is
+what the chapter reports, under the names ``motion.peephole_positions.air_on.exact`` and so on.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from functools import cached_property
+from typing import Literal, get_args
 
 import numpy as np
 
-from study.experiments import ceiling, cues
+from study.experiments import ceiling
+from study.experiments.reported import Number, Reported, count, named, number
+from study.experiments.runner import Runner
+from study.experiments.text import Table, pct, pct_ci, seeds_ci
+from study.experiments.tracker import TrackerError
 from study.learn import baseline
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
-from study.simulate import observe
+from study.simulate import measure, observe
 from study.simulate.data import Dataset, Split
+from study.simulate.synth import SynthConfig
+
+Air = Literal["air_on", "air_off"]
+"""The two data sets: the study's throws (air drag and added mass on), and the same throws without air."""
+View = Literal["exact", "near", "calibrated", "far"]
+"""How each air setting's positions are seen, in the table's order."""
+Observed = Literal["near", "calibrated", "far"]
+"""The views through a camera."""
+Network = Literal["peephole_positions", "peephole_velocity", "gru_velocity"]
+"""The networks trained on each column's condition, each at its own configuration."""
+Trained = Literal[Network, "peephole_exact_trained"]
+"""Every network row: the three networks, and Table 1's network trained exact and tested observed."""
+Learner = Literal[Trained, "minirocket", "physics", "rule"]
+"""Every row of the table, the ceiling aside."""
+
+AIRS: tuple[Air, ...] = get_args(Air)
+VIEWS: tuple[View, ...] = get_args(View)
+NETWORKS: tuple[Network, ...] = get_args(Network)
+LEARNERS: tuple[Learner, ...] = get_args(Learner)
+SHOWN: tuple[Learner, ...] = tuple(n for n in LEARNERS if n != "peephole_exact_trained")
+"""The learners the chapter's figure draws (the exact-trained row is the paper's network under another name)."""
+NAMES: dict[Learner, str] = {
+    "peephole_positions": "peephole LSTM, positions (the paper's)", "peephole_velocity": "peephole LSTM, with velocity",
+    "gru_velocity": "GRU, with velocity", "peephole_exact_trained": "peephole LSTM, positions, trained exact",
+    "minirocket": "MiniRocket, positions", "physics": "physics baseline", "rule": "best one-feature rule"}
+"""Each learner in words."""
+SHORT: dict[View, str] = {"exact": "exact", "near": "1 px at 4 m", "calibrated": "tracker", "far": "1 px at 55 m"}
+"""Each view in a table's header."""
 
 ROWS_1080 = 1080
 """Image rows of the camera whose pixel sets the two ends of the noise sweep."""
@@ -36,18 +74,14 @@ NEAR, FAR = 4.0, 55.0
 """Camera distances, metres: as the rendered videos are filmed, and where one pixel is about 4 cm."""
 RULE_FEATURES = ("bounces", "max_height_after_1s", "fall_acceleration")
 """The one-feature rules a height alone allows (``study.simulate.measure.FEATURES``)."""
-NETWORKS = ("lstm_positions", "lstm_velocity", "gru_velocity")
-"""The trained networks, each at its own configuration."""
-LEARNERS = (*NETWORKS, "lstm_exact_trained", "minirocket", "physics", "rule")
-"""Every row of the table, the ceiling aside."""
-NAMES = {"lstm_positions": "peephole LSTM, positions (the paper's)", "lstm_velocity": "peephole LSTM, with velocity",
-         "gru_velocity": "GRU, with velocity", "lstm_exact_trained": "peephole LSTM, positions, trained exact",
-         "minirocket": "MiniRocket, positions", "physics": "physics baseline", "rule": "best one-feature rule"}
-"""Each learner in words."""
+AIR_OFF_PARAMETERS = ("restitution", "friction")
+"""What the Bayes rule is told without air: all a trajectory can carry of the class."""
+AIR_ON_PARAMETERS = ("restitution", "friction", "mass")
+"""With air, the mass too: drag makes it visible."""
 
 
-VIEWS = ("exact", "near", "calibrated", "far")
-"""The camera conditions of each air setting, in the table's order."""
+# ---------------------------------------------------------------------------------------------
+# The conditions
 
 
 @dataclass(frozen=True)
@@ -56,8 +90,8 @@ class Column:
 
     air: bool
     """Air drag and added mass on (the study's data) or off (the same throws without air)."""
-    name: str
-    """One of :data:`VIEWS`."""
+    name: View
+    """How the positions are seen."""
     noise: float | None
     """The camera and tracker's position error, metres; None for exact positions."""
     drop: float = 0.0
@@ -66,8 +100,18 @@ class Column:
     """What the column is, in words, for the table's header and caption."""
 
     @property
+    def air_key(self) -> Air:
+        return "air_on" if self.air else "air_off"
+
+    @property
     def key(self) -> str:
-        return f"{'air_on' if self.air else 'air_off'}.{self.name}"
+        """``air_on.exact`` and so on: the column's part of a result's name."""
+        return f"{self.air_key}.{self.name}"
+
+    @property
+    def heading(self) -> str:
+        """The column in a table's header: ``air on, 1 px at 4 m``."""
+        return f"{'air on' if self.air else 'air off'}, {SHORT[self.name]}"
 
     def observation(self) -> observe.Observation | None:
         return None if self.noise is None else observe.Observation(noise=self.noise, drop=self.drop)
@@ -83,21 +127,39 @@ class Column:
         return ob.observe(ds.train.x[:, :T], ds.fps, seed=salt + 50), ob.observe(ds.test.x[:, :T], ds.fps, seed=salt)
 
 
-def columns(calibration: dict[str, float]) -> list[Column]:
-    """The table's eight columns, from the tracker's calibration (``Runner.calibration``): air on and off, each
-    exact and at one pixel of a 1080-row camera at :data:`NEAR` m, at the calibrated error, and at one pixel
+def columns(tracker: TrackerError) -> list[Column]:
+    """The table's eight columns, from the tracker's measured error (``Runner.tracker_error``): air on and off,
+    each exact and at one pixel of a 1080-row camera at :data:`NEAR` m, at the tracker's error, and at one pixel
     at :data:`FAR` m."""
     near = observe.Camera(distance=NEAR, rows=ROWS_1080).metres_per_pixel()
     far = observe.Camera(distance=FAR, rows=ROWS_1080).metres_per_pixel()
-    cal_px = calibration["noise_px"]
-    drop = calibration["drop"]
-    views = [("exact", None, "exact positions"),
-             ("near", near, f"1 px of a {ROWS_1080}-row camera at {NEAR:g} m ({1000 * near:.1f} mm)"),
-             ("calibrated", calibration["noise_m"],
-              f"the calibrated tracker, {cal_px:.2f} px at 4 m ({1000 * calibration['noise_m']:.1f} mm)"),
-             ("far", far, f"1 px of a {ROWS_1080}-row camera at {FAR:g} m ({1000 * far:.1f} mm)")]
-    return [Column(air, name, noise, 0.0 if noise is None else drop, label) for air in (True, False)
+    views: list[tuple[View, float | None, str]] = [
+        ("exact", None, "exact positions"),
+        ("near", near, f"1 px of a {ROWS_1080}-row camera at {NEAR:g} m ({1000 * near:.1f} mm)"),
+        ("calibrated", tracker.noise_m,
+         f"the calibrated tracker, {tracker.noise_px:.2f} px at 4 m ({1000 * tracker.noise_m:.1f} mm)"),
+        ("far", far, f"1 px of a {ROWS_1080}-row camera at {FAR:g} m ({1000 * far:.1f} mm)")]
+    return [Column(air, name, noise, 0.0 if noise is None else tracker.drop, label) for air in (True, False)
             for name, noise, label in views]
+
+
+def column_ceiling(cfg: SynthConfig, column: Column) -> float:
+    """The exact ceiling of a column (``study.experiments.ceiling``): with air, told the mass (which drag makes
+    visible) as well as the restitution and friction; without, the restitution and friction."""
+    return ceiling.exact_ceiling(cfg, AIR_ON_PARAMETERS if column.air else AIR_OFF_PARAMETERS)
+
+
+# ---------------------------------------------------------------------------------------------
+# The networks' configurations and runs
+
+
+def configs(runner: Runner) -> dict[Trained, TrainConfig]:
+    """Each network row's configuration before its column's condition: the paper's network at Table 1's point,
+    the same fed velocity and the GRU fed velocity each at its own grid's point, and Table 1's network again for
+    the row trained exact."""
+    return {"peephole_positions": runner.table1_config(), "peephole_velocity": runner.table1_config("velocity"),
+            "gru_velocity": dataclasses.replace(runner.winner("gru"), inputs="velocity"),
+            "peephole_exact_trained": runner.table1_config()}
 
 
 def trained_config(cfg: TrainConfig, column: Column) -> TrainConfig:
@@ -107,35 +169,32 @@ def trained_config(cfg: TrainConfig, column: Column) -> TrainConfig:
     return dataclasses.replace(cfg, dims="z", observe="fixed", observe_noise=column.noise, observe_drop=column.drop)
 
 
-def network_configs(cfgs: dict[str, TrainConfig], column: Column) -> dict[str, TrainConfig]:
+def network_configs(cfgs: Mapping[Trained, TrainConfig], column: Column) -> dict[Trained, TrainConfig]:
     """The config of every network row in ``column``: each of :data:`NETWORKS` trained on the column's condition,
     and, in an observed column, Table 1's network trained on exact positions."""
-    out = {name: trained_config(cfgs[name], column) for name in NETWORKS}
+    out: dict[Trained, TrainConfig] = {name: trained_config(cfgs[name], column) for name in NETWORKS}
     if column.noise is not None:
-        out["lstm_exact_trained"] = dataclasses.replace(cfgs["lstm_exact_trained"], dims="z")
+        out["peephole_exact_trained"] = dataclasses.replace(cfgs["peephole_exact_trained"], dims="z")
     return out
 
 
-def plan(runners: dict[bool, Any], cfgs: dict[str, TrainConfig], cols: list[Column],
-         seeds: tuple[int, ...]) -> list[tuple[Any, list[TrainConfig], bool]]:
-    """Every network run of the table, as ``Runner.prefetch`` takes them: ``runners`` maps air on / off to the
-    runner on that data."""
+def plan(runners: Mapping[bool, Runner], cfgs: Mapping[Trained, TrainConfig], cols: Sequence[Column],
+         seeds: tuple[int, ...]) -> list[tuple[Runner, list[TrainConfig], bool]]:
+    """Every network run of the table, as ``Runner.prefetch`` takes them: ``runners`` maps air on (True) / off
+    to the runner on that data."""
     return [(runners[c.air], [dataclasses.replace(cfg, seed=s) for cfg in network_configs(cfgs, c).values()
                               for s in seeds], True) for c in cols]
 
 
-def _z_only(x: np.ndarray) -> np.ndarray:
-    """(n, T, 3) with x = y = 0: what the one-feature rules and the baseline of one camera see."""
-    out = np.zeros_like(x)
-    out[..., 2] = x[..., 2]
-    return out
+# ---------------------------------------------------------------------------------------------
+# One learner in one column
 
 
-@dataclass
-class Cell:
-    """One learner in one column: which test throws each of its seeds got right."""
+@dataclass(frozen=True, eq=False)
+class Entry:
+    """One entry of the table: one learner in one column, and which test throws each of its seeds got right."""
 
-    learner: str
+    learner: Learner
     column: Column
     correct: np.ndarray
     """(S, n) bool: seed s got test throw i right (S = 1 for a learner without a seed)."""
@@ -145,51 +204,368 @@ class Cell:
     """Mean validation accuracy over the seeds (observed as in training), for the networks."""
     feature: str = ""
     """The rule's feature, for the rule."""
+    seeds: tuple[int, ...] = ()
+    """The seeds of its runs (none for the physics baseline and the rule)."""
 
-    @property
+    @cached_property
     def interval(self) -> Interval:
+        """Mean test accuracy with its bootstrap interval over the test throws and the seeds."""
         return bootstrap_accuracy(self.correct)
 
 
-def column_cells(runner: Any, cfgs: dict[str, TrainConfig], column: Column, seeds: tuple[int, ...],
-                 contact_height: float) -> list[Cell]:
-    """Every learner of :data:`LEARNERS` trained and tested on ``column``, with ``runner`` on the column's data
-    (air on or off): ``cfgs`` maps each network of :data:`NETWORKS`, and 'lstm_exact_trained', to its config."""
-    ds: Dataset = runner.dataset
-    T = cfgs["lstm_positions"].n_frames(ds.fps)
-    y = np.asarray(ds.test.y)
-    x_train, x_test = column.inputs(ds, T)
+def network_entries(runner: Runner, cfgs: Mapping[Trained, TrainConfig], column: Column, seeds: tuple[int, ...],
+                    x_test: np.ndarray) -> list[Entry]:
+    """Every network row of ``column`` on ``runner``'s data: its runs (cached or trained) and its models' answers
+    on the column's test inputs ``x_test`` (n, T, 3) metres."""
+    y = np.asarray(runner.dataset.test.y)
     out = []
     for name, cfg in network_configs(cfgs, column).items():
-        rows = runner.train_runs(cfg, ("z",), seeds, desc=f"{column.key} {name}")
+        runs = runner.train_runs(cfg, ("z",), seeds, desc=f"{column.key} {name}")
         models = runner.models(cfg, seeds, dims="z")
         correct = np.stack([m.predict_proba(x_test).argmax(1) == y for m in models])
-        out.append(Cell(name, column, correct, failed=sum(r["failed"] for r in rows),
-                        val=float(np.mean([r["val_accuracy"] for r in rows]))))
-    rocket_train = None if column.noise is None else x_train  # None: the cached fit on the exact split
-    labels = [runner.rocket("z", T, s, {"test": x_test}, train_x=rocket_train)["test"] for s in seeds]
-    out.append(Cell("minirocket", column, np.stack([p == y for p in labels])))
-    observed = dataclasses.replace(ds, train=Split(x_train, ds.train.y, ds.train.params))
-    phys = baseline.fit(observed, "z", T / ds.fps)
-    out.append(Cell("physics", column, (phys.predict_proba(x_test).argmax(1) == y)[None]))
-    rules = cues.rules(_z_only(x_train), ds.train.y, _z_only(x_test), y, ds.fps, contact_height, names=RULE_FEATURES)
-    best = max(rules, key=lambda r: r["train_accuracy"])  # chosen on the training split
-    out.append(Cell("rule", column, best["correct"][None], feature=best["feature"]))
-    out.sort(key=lambda c: LEARNERS.index(c.learner))
+        out.append(Entry(name, column, correct, runs.n_failed, float(np.mean(runs.val_accuracies())),
+                         seeds=tuple(seeds)))
     return out
 
 
-def column_ceiling(cfg: Any, column: Column) -> float:
-    """The exact ceiling of a column (``study.experiments.ceiling``): with air, told the mass (which drag makes
-    visible) as well as the restitution and friction; without, the restitution and friction."""
-    names = ("restitution", "friction", "mass") if column.air else ("restitution", "friction")
-    return ceiling.exact_ceiling(cfg, names)
+def rocket_entry(runner: Runner, column: Column, seeds: tuple[int, ...], x_train: np.ndarray,
+                 x_test: np.ndarray) -> Entry:
+    """MiniRocket on Z, fitted once per seed on the column's training inputs (the cached exact fit in an exact
+    column) and scored on its test inputs, both (n, T, 3) metres."""
+    y = np.asarray(runner.dataset.test.y)
+    train_x = None if column.noise is None else x_train  # None: the cached fit on the exact split
+    labels = [runner.rocket("z", x_test.shape[1], s, {"test": x_test}, train_x=train_x)["test"] for s in seeds]
+    return Entry("minirocket", column, np.stack([p == y for p in labels]), seeds=tuple(seeds))
 
 
-def best_of(cells: list[Cell]) -> dict[str, Any]:
-    """The learner with the highest mean accuracy in one column, and whether it is tied with the next: the paired
-    difference's interval (same test throws) spans 0."""
-    ranked = sorted(cells, key=lambda c: -c.correct.mean())
+def physics_entry(ds: Dataset, column: Column, x_train: np.ndarray, x_test: np.ndarray) -> Entry:
+    """The physics baseline on Z, fitted on the column's training inputs and scored on its test inputs."""
+    T = x_test.shape[1]
+    observed = dataclasses.replace(ds, train=Split(x_train, ds.train.y, ds.train.params))
+    phys = baseline.fit(observed, "z", T / ds.fps)
+    return Entry("physics", column, (phys.predict_proba(x_test).argmax(1) == np.asarray(ds.test.y))[None])
+
+
+def rule_entry(ds: Dataset, column: Column, x_train: np.ndarray, x_test: np.ndarray, contact_height: float) -> Entry:
+    """The best one-feature rule of :data:`RULE_FEATURES` on the height alone, chosen on the column's training
+    inputs (``measure.best_rule``) and scored on its test inputs."""
+    rules = measure.simple_rules(observe.height_only(x_train), ds.train.y, observe.height_only(x_test), ds.test.y,
+                                 ds.fps, contact_height, RULE_FEATURES)
+    best = measure.best_rule(rules)
+    return Entry("rule", column, best["correct"][None], feature=best["feature"])
+
+
+def column_entries(runner: Runner, cfgs: Mapping[Trained, TrainConfig], column: Column, seeds: tuple[int, ...],
+                   contact_height: float) -> list[Entry]:
+    """Every learner of :data:`LEARNERS` trained and tested on ``column``, with ``runner`` on the column's data
+    (air on or off), in the table's order."""
+    ds = runner.dataset
+    x_train, x_test = column.inputs(ds, cfgs["peephole_positions"].n_frames(ds.fps))
+    out = network_entries(runner, cfgs, column, seeds, x_test)
+    out += [rocket_entry(runner, column, seeds, x_train, x_test), physics_entry(ds, column, x_train, x_test),
+            rule_entry(ds, column, x_train, x_test, contact_height)]
+    return sorted(out, key=lambda e: LEARNERS.index(e.learner))
+
+
+@dataclass(frozen=True)
+class Lead:
+    """The learner with the highest mean accuracy in one column, and its paired lead over the next."""
+
+    best: Learner
+    next: Learner
+    difference: Interval
+    """Best minus next, paired on the same test throws (bootstrap)."""
+
+    @property
+    def tied(self) -> bool:
+        """The difference's interval spans 0."""
+        return self.difference.lo <= 0 <= self.difference.hi
+
+
+def best_of(entries: Sequence[Entry]) -> Lead:
+    """The learner with the highest mean accuracy among ``entries`` (one column; ties: the first), and its lead
+    over the next."""
+    ranked = sorted(entries, key=lambda e: -e.correct.mean())
     first, second = ranked[0], ranked[1]
-    diff = bootstrap_difference(first.correct, second.correct)
-    return {"best": first.learner, "next": second.learner, "difference": diff, "tied": diff.lo <= 0 <= diff.hi}
+    return Lead(first.learner, second.learner, bootstrap_difference(first.correct, second.correct))
+
+
+# ---------------------------------------------------------------------------------------------
+# What the chapter reports
+
+
+@dataclass(frozen=True)
+class Ceiling(Reported):
+    """The exact ceiling of the priors."""
+
+    air_off: Number
+    """Without air: the Bayes rule told each throw's restitution and friction."""
+    air_off_restitution: Number
+    """Without air, told the restitution alone."""
+    air_on: Number
+    """With air: told the mass too."""
+
+
+@dataclass(frozen=True)
+class Best(Reported):
+    """The best learner of one column: how far below the ceiling, and by how much ahead of the next."""
+
+    gap_to_ceiling: Number
+    """The ceiling minus the best learner's mean accuracy."""
+    lead: Number
+    """The best learner minus the next, paired; its source names ``best``, ``next`` and whether ``tied``."""
+
+    @property
+    def learner(self) -> Learner:
+        return self.lead.source["best"]
+
+    @property
+    def runner_up(self) -> Learner:
+        return self.lead.source["next"]
+
+    @property
+    def tied(self) -> bool:
+        return bool(self.lead.source["tied"])
+
+
+@dataclass(frozen=True)
+class Numbers(Reported):
+    """Every number the chapter *What the motion allows* reports."""
+
+    CHAPTER = "motion"
+    ceiling: Ceiling
+    noise: dict[Observed, Number]
+    """Each observed view's camera error, metres."""
+    learners: dict[Learner, dict[Air, dict[View, Number]]] = named("")
+    """Each learner's test accuracy in each column (``motion.peephole_positions.air_on.exact``)."""
+    failed_runs: Number
+    """Network runs of the chapter that failed to train (each run once)."""
+    best: dict[Air, dict[View, Best]]
+    """Each column's best learner."""
+
+
+def ceiling_numbers(prior: SynthConfig) -> Ceiling:
+    """The exact ceilings of ``prior``, without air (told the restitution and friction, or the restitution
+    alone) and with it (the mass too)."""
+    return Ceiling(
+        number(ceiling.exact_ceiling(prior, AIR_OFF_PARAMETERS),
+               "exact ceiling, air off: Bayes rule on the true restitution and friction"),
+        number(ceiling.exact_ceiling(prior, ("restitution",)), "exact ceiling on the restitution alone"),
+        number(ceiling.exact_ceiling(prior, AIR_ON_PARAMETERS),
+               "exact ceiling, air on: the mass too (drag makes it visible)"))
+
+
+def learner_numbers(entries: Mapping[tuple[Learner, str], Entry],
+                    cols: Sequence[Column]) -> dict[Learner, dict[Air, dict[View, Number]]]:
+    """Each entry's accuracy with its interval, under its learner, air and view."""
+    out: dict[Learner, dict[Air, dict[View, Number]]] = {}
+    for name in LEARNERS:
+        for c in cols:
+            e = entries.get((name, c.key))
+            if e is None:
+                continue
+            out.setdefault(name, {}).setdefault(c.air_key, {})[c.name] = number(
+                e.interval, f"{NAMES[name]}, Z, {'air on' if c.air else 'air off'}, {c.label}",
+                seeds=list(e.seeds) if e.correct.shape[0] > 1 else [], failed=e.failed)
+    return out
+
+
+def best_numbers(leads: Mapping[str, Lead], ceilings: Mapping[str, float], entries: Mapping[tuple[Learner, str], Entry],
+                 cols: Sequence[Column]) -> dict[Air, dict[View, Best]]:
+    """Each column's best learner: its gap to the ceiling and its lead over the next."""
+    out: dict[Air, dict[View, Best]] = {}
+    for c in cols:
+        b = leads[c.key]
+        gap = ceilings[c.key] - entries[b.best, c.key].interval.value
+        out.setdefault(c.air_key, {})[c.name] = Best(
+            number(gap, f"ceiling minus the best learner, {c.key}"),
+            number(b.difference, f"the best learner minus the next, paired, {c.key}", signed=True,
+                   best=b.best, next=b.next, tied=bool(b.tied)))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# The chapter's result
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Everything the chapter shows: its numbers (:attr:`numbers`), its tables and sentences, its figure's data."""
+
+    numbers: Numbers
+    """What the chapter reports (the results file's ``motion.*``)."""
+    columns: tuple[Column, ...]
+    """The table's columns, air on first."""
+    configs: dict[Trained, TrainConfig]
+    """Each network row's configuration before its column's condition."""
+    entries: dict[tuple[Learner, str], Entry]
+    """Every (learner, column key) of the table."""
+    ceilings: dict[str, float]
+    """Each column's exact ceiling, by column key."""
+    leads: dict[str, Lead]
+    """Each column's best learner, by column key."""
+    motion_table: Table
+    """Every learner in every column, and the ceiling."""
+    seed_table: Table
+    """Every learned entry seed by seed."""
+    best_table: Table
+    """Each column's best learner, its lead and its distance from the ceiling."""
+    gap_table: Table
+    """How far each learner is from its column's ceiling."""
+    conditions: str
+    """The air-on columns in words."""
+    drop_pct: str
+    """The share of frames every observed column loses, percent."""
+    restitution_overlap: str
+    """Where the two classes' restitution priors overlap."""
+    length_s: float
+    """Input length, seconds."""
+    n_runs: int
+    """Network runs of the chapter."""
+    n_failed: int
+    """Of those, runs that failed to train."""
+
+    def curve(self, learner: Learner, air: bool) -> tuple[np.ndarray, list[Interval]]:
+        """One learner's accuracy against the camera's error at one air setting: (k,) errors in millimetres (0
+        for exact positions) and the k intervals."""
+        cs = [c for c in self.columns if c.air == air]
+        return np.array([1000 * (c.noise or 0.0) for c in cs]), [self.entries[learner, c.key].interval for c in cs]
+
+    def ceiling_of(self, air: bool) -> float:
+        """The exact ceiling with the air on or off."""
+        return self.ceilings["air_on.exact" if air else "air_off.exact"]
+
+    # Sentences whose words depend on the numbers -------------------------------------------------
+
+    @property
+    def vel_point(self) -> str:
+        c = self.configs["peephole_velocity"]
+        return f"lr {c.lr:g}, truncation {c.truncation}"
+
+    @property
+    def gru_point(self) -> str:
+        c = self.configs["gru_velocity"]
+        return f"lr {c.lr:g}, truncation {c.truncation}"
+
+    def _velocity_gain(self, air: Air) -> str:
+        vel, pos = (self.entries[n, f"{air}.exact"].interval.value for n in ("peephole_velocity", "peephole_positions"))
+        return f"{100 * (vel - pos):+.1f}"
+
+    @property
+    def vel_gain_on(self) -> str:
+        """What velocity adds to the paper's network on exact positions with the air, points."""
+        return self._velocity_gain("air_on")
+
+    @property
+    def vel_gain_off(self) -> str:
+        """The same without air."""
+        return self._velocity_gain("air_off")
+
+    def _best_words(self, key: str) -> str:
+        b = self.leads[key]
+        iv = self.entries[b.best, key].interval
+        tie = f"; tied with the {NAMES[b.next]}" if b.tied else ""
+        return (f"the {NAMES[b.best]} at {pct(iv.value)} ({100 * (self.ceilings[key] - iv.value):.1f} points below "
+                f"the ceiling{tie})")
+
+    @property
+    def answer(self) -> str:
+        """The chapter's answer in one paragraph."""
+        n = self.numbers.ceiling
+        return (f"Without air no classifier of these trajectories can beat {pct(n.air_off.value)}; with the air, "
+                f"whose drag makes the mass visible, {pct(n.air_on.value)}. On exact positions the best learner is "
+                f"{self._best_words('air_on.exact')} with the air and {self._best_words('air_off.exact')} without; "
+                f"through the calibrated tracker, {self._best_words('air_on.calibrated')} with the air and "
+                f"{self._best_words('air_off.calibrated')} without.")
+
+
+def _motion_table(entries: Mapping[tuple[Learner, str], Entry], cols: Sequence[Column], ceilings: Mapping[str, float],
+                  heads: Mapping[str, str]) -> Table:
+    rows = []
+    for name in LEARNERS:
+        row = {"learner": NAMES[name]}
+        for c in cols:
+            e = entries.get((name, c.key))
+            if e is None:
+                row[c.key] = "—"
+                continue
+            extra = f" ({e.feature})" if e.feature else ""
+            note = f"; {e.failed} failed" if e.failed else ""
+            row[c.key] = f"{pct_ci(e.interval)}{extra}{note}"
+        rows.append(row)
+    rows.append({"learner": "**ceiling of the priors**", **{c.key: f"**{pct(ceilings[c.key])}**" for c in cols}})
+    return Table(rows, heads)
+
+
+def _seed_table(entries: Mapping[tuple[Learner, str], Entry], cols: Sequence[Column]) -> Table:
+    rows = [{"learner": NAMES[n], "column": c.heading, "seeds": seeds_ci(entries[n, c.key].correct)}
+            for n in LEARNERS for c in cols if (n, c.key) in entries and entries[n, c.key].correct.shape[0] > 1]
+    return Table(rows, {"learner": "learner", "column": "condition",
+                        "seeds": "mean [bootstrap 95 % CI]; t-interval over the seeds; each seed (%)"})
+
+
+def _best_table(leads: Mapping[str, Lead], entries: Mapping[tuple[Learner, str], Entry], cols: Sequence[Column],
+                ceilings: Mapping[str, float]) -> Table:
+    rows = []
+    for c in cols:
+        b = leads[c.key]
+        value = entries[b.best, c.key].interval.value
+        d = b.difference.value
+        lead = (f"tied with the {NAMES[b.next]} ({100 * d:+.1f} points, interval across 0)" if b.tied
+                else f"{100 * d:.1f} points ahead of the {NAMES[b.next]}")
+        rows.append({"column": c.heading, "best": NAMES[b.best], "accuracy": pct(value), "lead": lead,
+                     "gap": f"{100 * (ceilings[c.key] - value):.1f}"})
+    return Table(rows, {"column": "condition", "best": "best learner", "accuracy": "its accuracy",
+                        "lead": "against the next", "gap": "below the ceiling (points)"})
+
+
+def _gap_table(entries: Mapping[tuple[Learner, str], Entry], cols: Sequence[Column], ceilings: Mapping[str, float],
+               heads: Mapping[str, str]) -> Table:
+    rows = [{"learner": NAMES[n], **{c.key: f"{100 * (ceilings[c.key] - entries[n, c.key].correct.mean()):.1f}"
+                                      if (n, c.key) in entries else "—" for c in cols}} for n in LEARNERS]
+    return Table(rows, heads)
+
+
+def report(prior: SynthConfig, cfgs: Mapping[Trained, TrainConfig], cols: Sequence[Column],
+           entries: Mapping[tuple[Learner, str], Entry], drop: float) -> Motion:
+    """The chapter's result from its entries (``entries[learner, column.key]``, from :func:`column_entries`):
+    numbers, tables and sentences. ``drop``: the share of frames the tracker loses."""
+    entries = dict(entries)
+    ceilings = {c.key: column_ceiling(prior, c) for c in cols}
+    leads = {c.key: best_of([entries[n, c.key] for n in LEARNERS if (n, c.key) in entries]) for c in cols}
+    nets = [e for (n, _), e in entries.items() if n in NETWORKS]  # each run once: not the exact-trained row
+    n_failed = sum(e.failed for e in nets)
+    numbers = Numbers(
+        ceiling_numbers(prior),
+        {c.name: number(c.noise, f"camera error of the column: {c.label}", unit="m")  # type: ignore[misc]
+         for c in cols if c.air and c.noise is not None},
+        learner_numbers(entries, cols),
+        count(n_failed, "network runs of this chapter that failed to train"),
+        best_numbers(leads, ceilings, entries, cols))
+    length = cfgs["peephole_positions"].length
+    heads = {"learner": f"learner (Z, {length:g} s)", **{c.key: c.heading for c in cols}}
+    light, heavy = prior.light.restitution, prior.heavy.restitution
+    return Motion(
+        numbers, tuple(cols), dict(cfgs), entries, ceilings, leads, _motion_table(entries, cols, ceilings, heads),
+        _seed_table(entries, cols), _best_table(leads, entries, cols, ceilings), _gap_table(entries, cols, ceilings, heads),
+        conditions="; ".join(c.label for c in cols if c.air), drop_pct=f"{100 * drop:.1f}",
+        restitution_overlap=f"{max(light[0], heavy[0]):g}–{min(light[1], heavy[1]):g}", length_s=length,
+        n_runs=sum(e.correct.shape[0] for e in nets), n_failed=n_failed)
+
+
+def compute(runner: Runner, cfgs: Mapping[Trained, TrainConfig] | None = None,
+            tracker: TrackerError | None = None) -> Motion:
+    """The chapter *What the motion allows* on ``runner``'s data (air on) and the same throws without air: every
+    network run at once (so every core stays busy), then every entry of the table and the result.
+
+    ``cfgs``: each network row's configuration (default :func:`configs`); ``tracker``: the tracker's error
+    (default ``runner.tracker_error()``, measured on the rendered throws)."""
+    cfgs = configs(runner) if cfgs is None else cfgs
+    tracker = runner.tracker_error() if tracker is None else tracker
+    cols = columns(tracker)
+    on = {True: runner, False: runner.air_off()}
+    seeds = runner.preset.grid_seeds
+    runner.prefetch(plan(on, cfgs, cols, seeds), desc="every network")
+    contact = runner.synth_config.shape.bounding_radius
+    entries = {(e.learner, c.key): e for c in cols for e in column_entries(on[c.air], cfgs, c, seeds, contact)}
+    return report(runner.synth_config, cfgs, cols, entries, tracker.drop)

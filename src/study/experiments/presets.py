@@ -70,9 +70,9 @@ class Preset:
     """Training throws per class and shape in the cue chapter's mixed-shape training set."""
     shape_test: int = 500
     """Test throws per class and shape in the cue chapter."""
-    calibration_per_class: int = 2500
-    """Throws per class in the decision chapter's calibration split (simulated for it alone: a 1 % miss
-    rate is then 25 heavy objects, not 4)."""
+    certify_per_class: int = 2500
+    """Throws per class in the decision chapter's certification split, on which its thresholds are certified
+    (simulated for it alone: a 1 % miss rate is then 25 heavy objects, not 4)."""
     videos_per_class: int = 20
     """Rendered videos per class in the real-world test (the paper filmed 20 + 20)."""
     real_clips: int | None = None
@@ -101,7 +101,7 @@ PRESETS: dict[str, Preset] = {
         name="smoke", length=1.0, lrs=(3e-3,), truncations=(10, 30), grid_seeds=(0, 1), seeds=(0, 1), data_seeds=(0, 1),
         lengths=(0.5, 1.0, 1.5), length_seeds=(0, 1), max_epochs=3, patience=2, min_epochs=2, long_lengths=(1.5,),
         protocol_seeds=(0,), first_patience=1, first_max_epochs=2, shape_train=4, shape_test=4,
-        calibration_per_class=8, videos_per_class=2, real_clips=2, render_shadows=False,
+        certify_per_class=8, videos_per_class=2, real_clips=2, render_shadows=False,
     ),
     # The paper's scale: the grid is learning rate x truncation, 3 seeds a point: the two LSTM cells at lr 1e-3
     # (at 3e-3 every one of their seeds stalled on the box-like priors, in every build until the one that

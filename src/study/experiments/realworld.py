@@ -1,35 +1,62 @@
-"""The paper's real-world experiment: videos in, tracked heights, the Z-only classifier's labels out.
+"""The chapter *Real-world test*: videos in, tracked heights, the Z-only classifier's labels out.
 
-Two sources of video:
+The pipeline, video by video:
 
-- :func:`render_set`: throws drawn from the synthesis priors (``study.simulate.synth``), rendered with
-  ``study.see.render`` from a side camera (the launch turned to cross the view, as in the paper's
-  videos), with a known class and ground truth: the paper's 20 + 20 design, heavy objects included.
-- :func:`read_manifest`: a folder of the user's own labelled videos with a ``MANIFEST.csv``
-  (columns ``file`` and ``label``; other columns are kept).
+- :func:`render_set` (:func:`book_set`, the book's): throws drawn from the synthesis priors
+  (``study.simulate.synth``), rendered with ``study.see.render`` from a side camera (the launch turned to cross
+  the view, as in the paper's videos), with a known class and ground truth: the paper's 20 + 20 design, heavy
+  objects included. :func:`read_manifest` (:func:`real_clips`): a folder of labelled videos with a
+  ``MANIFEST.csv`` (columns ``file`` and ``label``; other columns are kept), the real clips beside the project
+  or the reader's own.
+- :func:`track_all` tracks each video (heights in metres, the pixel scale taken from the object's known size);
+  :func:`classify` turns each height series into the model's input (``study.see.track.to_model_input``) and
+  records the model's :class:`Label`.
 
-:func:`classify` tracks each video, turns its height series into the model's input
-(``study.see.track.to_model_input``) and records the model's probabilities.
+:func:`compute` runs the chapter on a runner and returns :class:`RealWorld`:
+
+1. the tracker against the rendered ground truth (:func:`tracking_error`) and the scale it read off the
+   object's apparent size (:func:`scale_error`);
+2. the model a camera in a car should use, chosen among four candidates on observed validation throws
+   (:func:`recommend`);
+3. Table 1's Z model (and the recommended one, where it differs) on every video, per class with Wilson
+   intervals beside the paper's 93 % and 100 % (``study.experiments.paper.REAL_WORLD``), every candidate's
+   label for every video, and how the labels move with a wrong scale (:data:`FACTORS`);
+4. the data of the paper's Figures 1, 5 and 6 (:class:`Filmstrip`, :class:`HeightSeries`, :class:`TrackView`).
+
+:class:`Numbers` is what the chapter reports, under the names ``realworld.table1.rendered.light`` and so on.
 """
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 import os
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 import numpy as np
 
 from study import CLASSES
 from study.core import cache
-from study.simulate import measure
 from study.core.errors import ConfigError, DataError, StudyError
-from study.learn.metrics import Interval, wilson
 from study.core.progress import Progress
-from study.see import render, track
+from study.experiments import paper, verdicts
+from study.experiments.presets import preset
+from study.experiments.reported import Number, Reported, Verdict, named, number
+from study.experiments.text import Table, pct, pct_ci
+from study.learn.config import Inputs, TrainConfig
+from study.learn.metrics import Interval, wilson
+from study.see import render, track, video
+from study.simulate import measure, synth
+
+if TYPE_CHECKING:  # the runner imports this module (its rendered throws): a type here, not an import cycle
+    from study.experiments.runner import Recommendation, Runner
+
+# ---------------------------------------------------------------------------------------------
+# Videos: rendered with a known answer, or read from a folder with a manifest
 
 LABEL_ALIASES = {"light": "light", "bouncy": "light", "ball": "light", "heavy": "heavy", "sliding": "heavy", "cube": "heavy"}
 """Manifest labels understood, mapped to the study's classes."""
@@ -112,6 +139,17 @@ def read_manifest(video_dir: str | Path, color: str = "tennis", object_size: flo
     return sorted(out, key=lambda v: v.path.name)
 
 
+def real_clips(video_dir: str | Path = "", color: str = "tennis", object_size: float = TENNIS_BALL,
+               limit: int | None = None) -> list[Video]:
+    """The real clips the chapter classifies: those of ``video_dir``'s manifest (:func:`read_manifest`), or, with
+    no ``video_dir``, of :func:`real_clips_dir`'s folder if it holds a manifest (none there: no real clips); the
+    first ``limit`` of them (None: all)."""
+    folder = real_clips_dir(video_dir)
+    if not video_dir and not (folder / "MANIFEST.csv").is_file():
+        return []
+    return read_manifest(folder, color=color, object_size=object_size)[:limit]
+
+
 def launch_across_view(qpos: np.ndarray, qvel: np.ndarray, start_x: float = 1.2) -> tuple[np.ndarray, np.ndarray]:
     """A launch turned to cross the side camera's view: horizontal speed kept, direction +x or -x, start at -+start_x."""
     qpos, qvel = qpos.copy(), qvel.copy()
@@ -150,8 +188,6 @@ def render_set(
     horizontal speed capped at ``max_speed`` m/s so the object stays in the picture longer. Videos
     are cached under ``out_dir/<key>/`` by a hash of everything that determines them.
     """
-    from study.simulate import synth
-
     cfg = cfg.replace(n_test=n_per_class)
     key = cache.key({"synth": cfg.to_dict(), "seed": seed, "render": rcfg.__dict__ | {"progress": None},
                      "max_speed": max_speed,
@@ -180,15 +216,16 @@ def book_set(preset_name: str, fps: float, duration: float, render_seed: int = 1
     """The rendered throws the book uses (the real-world chapter's, which the cue chapter measures the
     tracker on): the preset's ``videos_per_class`` of each class at 320 x 240, ``fps``, ``duration``
     seconds, with motion blur, sensor noise and JPEG loss; rendered once, then read from the cache."""
-    from study.experiments.presets import preset
-    from study.simulate import synth
-
     p = preset(preset_name)
     rcfg = render.RenderConfig(width=320, height=240, fps=fps, duration=duration, blur_subframes=2, noise_std=2.0,
                                jpeg_quality=85, shadows=p.render_shadows, seed=render_seed)
     cfg = synth.SynthConfig.preset(preset_name)
     videos = render_set(cfg, p.videos_per_class, render_seed, Path(data_dir) / "realworld", rcfg, progress=progress)
     return videos, rcfg
+
+
+# ---------------------------------------------------------------------------------------------
+# Tracking, and the labels a model gives
 
 
 @dataclass(frozen=True)
@@ -201,7 +238,7 @@ class Tracked:
     """Why the video could not be tracked ('' when it was)."""
 
 
-def track_all(videos: list[Video], progress: bool = True) -> dict[str, Tracked]:
+def track_all(videos: Sequence[Video], progress: bool = True) -> dict[str, Tracked]:
     """Track every video (heights in metres from its object size): file name -> :class:`Tracked`."""
     out: dict[str, Tracked] = {}
     with Progress("track videos", total=len(videos), show=progress, unit="video") as bar:
@@ -215,73 +252,504 @@ def track_all(videos: list[Video], progress: bool = True) -> dict[str, Tracked]:
     return out
 
 
+@dataclass(frozen=True)
+class Label:
+    """What a model says about one video (:func:`classify`): its label and what the tracker saw, or why the video
+    could not be tracked (then no label)."""
+
+    file: str
+    """The video's file name."""
+    label: str
+    """Its true class, 'light' or 'heavy'."""
+    error: str = ""
+    """Why the video could not be tracked ('' when it was)."""
+    frames: int = 0
+    """Frames of the video."""
+    found: float = 0.0
+    """Share of its frames in which the tracker measured the object."""
+    filled: int = 0
+    """Frames filled by interpolation."""
+    pieces: int = 0
+    """Pieces the trajectory split into at long gaps (the longest is classified)."""
+    bounces: int | None = None
+    """Bounces seen in the piece classified (None for a trajectory in pixels)."""
+    metres_per_pixel: float = math.nan
+    """The pixel scale, from the object's known size: metres per pixel."""
+    p_light: float = math.nan
+    """The model's probability of light."""
+    p_heavy: float = math.nan
+    """The model's probability of heavy."""
+    predicted: str = ""
+    """The model's label ('' when not tracked)."""
+
+    @property
+    def tracked(self) -> bool:
+        return not self.error
+
+    @property
+    def correct(self) -> bool:
+        """Labelled as its true class (False when not tracked)."""
+        return self.tracked and self.predicted == self.label
+
+
 def classify(
     model: Model,
-    videos: list[Video],
+    videos: Sequence[Video],
     tracks: dict[str, Tracked] | None = None,
     height_factor: float = 1.0,
     progress: bool = True,
-) -> list[dict[str, Any]]:
-    """Classify each video from its track (``tracks`` from :func:`track_all`, tracked here if None).
-
-    Row: file, label, frames, found (fraction measured), filled, pieces, bounces (in the piece
-    used), metres_per_pixel (from the object size), p_light, p_heavy, predicted, correct, and
-    error (the reason, if the video could not be tracked; then no prediction). ``height_factor``
-    multiplies every height (a wrong pixel scale), to measure how much the label depends on it.
-    """
+) -> list[Label]:
+    """Each video's :class:`Label` from its track (``tracks`` from :func:`track_all`, tracked here if None), in
+    the order of ``videos``. ``height_factor`` multiplies every height (a wrong pixel scale), to measure how
+    much the label depends on it."""
     if model.dims != "z":
         raise ConfigError(f"the model was trained on {model.dims!r}; one camera gives only the height: use a 'z' model")
     tracks = track_all(videos, progress) if tracks is None else tracks
-    rows = []
+    out = []
     for v in videos:
-        row: dict[str, Any] = {"file": v.path.name, "label": v.label}
         tracked = tracks[v.path.name]
         traj = tracked.trajectory
         if traj is None:
-            rows.append(row | {"error": tracked.error})
+            out.append(Label(v.path.name, v.label, tracked.error))
             continue
         piece = traj.longest()
         x = track.to_model_input(traj, model.fps, model.n_frames, height_factor=height_factor, rest_height=v.rest_height)
         p = np.asarray(model.predict_proba(x[None]))[0]
-        pred = CLASSES[int(np.argmax(p))]
-        row |= {"frames": len(traj.t), "found": traj.found_fraction, "filled": int(traj.filled.sum()),
-                "pieces": len(traj.segments()), "bounces": measure.bounce_count(piece.height) if piece.units == "m" else None,
-                "metres_per_pixel": traj.height_per_pixel,
-                "p_light": float(p[0]), "p_heavy": float(p[1]), "predicted": pred, "correct": pred == v.label,
-                "error": ""}
-        rows.append(row)
-    return rows
+        out.append(Label(v.path.name, v.label, "", len(traj.t), traj.found_fraction, int(traj.filled.sum()),
+                         len(traj.segments()), measure.bounce_count(piece.height) if piece.units == "m" else None,
+                         traj.height_per_pixel, float(p[0]), float(p[1]), CLASSES[int(np.argmax(p))]))
+    return out
 
 
-def per_class_interval(rows: list[dict[str, Any]]) -> dict[str, Interval | None]:
-    """Accuracy per true class over the rows that were classified, with its Wilson interval (None for a
-    class with no classified video): for 20 videos a bootstrap would understate the uncertainty."""
+def per_class_interval(labels: Sequence[Label]) -> dict[str, Interval | None]:
+    """Accuracy per true class over the videos that were classified, with its Wilson interval (None for a class
+    with no classified video): for 20 videos a bootstrap would understate the uncertainty."""
     out: dict[str, Interval | None] = {}
     for c in CLASSES:
-        ok = [bool(r["correct"]) for r in rows if r["label"] == c and not r.get("error")]
+        ok = [r.correct for r in labels if r.label == c and r.tracked]
         out[c] = wilson(sum(ok), len(ok)) if ok else None
     return out
 
 
-def tracking_error(videos: list[Video]) -> dict[str, float]:
-    """Pixel error of the tracker against the rendered ground truth, over all measured frames of ``videos``.
+@dataclass(frozen=True)
+class PixelError:
+    """The tracker against the rendered ground truth (:func:`tracking_error`)."""
 
-    Returns mean and 95th-percentile error (pixels) and the fraction of frames found.
-    """
+    mean_px: float
+    """Mean distance of the tracked centroid from the true centre's projection, pixels (NaN: none measured)."""
+    p95_px: float
+    """Its 95th percentile, pixels."""
+    found: float
+    """Share of the frames in which the object was found."""
+
+
+def tracking_error(videos: Sequence[Video]) -> PixelError:
+    """The tracker's pixel error against the rendered ground truth, over every measured frame of ``videos`` that
+    have one (a video that cannot be tracked counts its frames as not found)."""
     errs, found, total = [], 0, 0
     for v in videos:
         if v.truth is None:
             continue
+        gt = render.read_truth(v.truth)
         try:
             traj = track.detect_all(v.path, track.TrackConfig(color=v.color, progress=False))
         except StudyError:
-            gt = render.read_truth(v.truth)
             total += len(gt["t"])
             continue
-        gt = render.read_truth(v.truth)
         m = traj.measured
         errs.append(np.hypot(traj.u - gt["u"], traj.v - gt["v"])[m])
         found += int(m.sum())
         total += len(m)
     e = np.concatenate(errs) if errs else np.array([math.nan])
-    return {"mean_px": float(np.mean(e)), "p95_px": float(np.percentile(e, 95)), "found": found / max(total, 1)}
+    return PixelError(float(np.mean(e)), float(np.percentile(e, 95)), found / max(total, 1))
+
+
+def true_scale(rcfg: render.RenderConfig, depth: float = 4.0) -> float:
+    """Metres per pixel of the rendered camera at the throw's ``depth`` (m): the scale the tracker should read."""
+    return render.metres_per_pixel(render.class_model("light"), "side", rcfg.height, depth=depth)
+
+
+def scale_error(tracks: Iterable[Tracked], true: float) -> float:
+    """Median over the tracked videos of |scale / ``true`` - 1|: how far the scale read off the object's apparent
+    size (its blob's equivalent-disc diameter) is from the true metres per pixel."""
+    scales = np.array([t.trajectory.height_per_pixel for t in tracks if t.trajectory])
+    return float(np.median(np.abs(scales / true - 1)))
+
+
+# ---------------------------------------------------------------------------------------------
+# What the chapter reports
+
+Class = Literal["light", "heavy"]
+"""The study's classes (``study.CLASSES``)."""
+Training = Literal["exact", "randomised"]
+"""How a candidate was trained: on exact positions, or on random observations."""
+ModelKey = Literal["table1", "recommended"]
+"""The models the chapter classifies the videos with: Table 1's Z model, and the recommended one where it differs."""
+
+WHY_NOT_COMPARABLE: dict[str, str] = {
+    "rendered": "rendered MuJoCo throws from the study's priors, not the paper's filmed golf ball and wooden cube",
+    "real": "tennis balls filmed by others, classified by a model trained on 20 cm boxes, not the paper's golf ball",
+}
+"""Why neither of our video sets can be compared with the paper's footage."""
+FACTORS = (0.5, 0.75, 1.0, 1.5, 2.0)
+"""Factors the pixel scale is multiplied by (a wrong scale), to measure how much the labels depend on it."""
+FILM_FRAMES = 6
+"""Frames of each video in Figure 1."""
+FILM_SECONDS = 2.0
+"""Figure 1 shows each video's first seconds, this many."""
+
+
+@dataclass(frozen=True)
+class Candidate(Reported):
+    """One candidate model for a camera."""
+
+    val: Number
+    """Accuracy on seed 0's validation throws, observed as the tracker observes them."""
+
+
+@dataclass(frozen=True)
+class Classified(Reported):
+    """One model's labels of the videos, per true class, each with its Wilson interval and beside the paper's."""
+
+    rendered: dict[Class, Number]
+    """The rendered videos (a class with no video tracked is left out)."""
+    real: dict[Class, Number]
+    """The real clips (only the classes they hold)."""
+
+
+@dataclass(frozen=True)
+class Numbers(Reported):
+    """Every number and verdict the chapter *Real-world test* reports."""
+
+    CHAPTER = "realworld"
+    candidate: dict[Inputs, dict[Training, Candidate]]
+    """Each candidate, by what it reads and how it was trained."""
+    figure1: Verdict
+    """The paper's Figure 1: frames of a light and a heavy object."""
+    figure5: Verdict
+    """The paper's Figure 5: tracked heights of the real videos."""
+    figure6: Verdict
+    """The paper's Figure 6: frames of the real videos, tracked."""
+    models: dict[ModelKey, Classified] = named("")
+    """Each model's labels: ``realworld.table1.rendered.light`` and so on."""
+
+
+# ---------------------------------------------------------------------------------------------
+# What the figures draw
+
+
+@dataclass(frozen=True)
+class Filmstrip:
+    """A video's first seconds in a few frames (the paper's Figure 1)."""
+
+    title: str
+    """Which video, in words."""
+    times: tuple[str, ...]
+    """Each frame's time, as the figure labels it."""
+    frames: np.ndarray
+    """(k, H, W, 3) uint8 RGB."""
+
+
+@dataclass(frozen=True)
+class TrackView:
+    """One video's whole track over its last tracked frame (the paper's Figure 6)."""
+
+    title: str
+    """Which video, in words (and 'not tracked' when it was not)."""
+    frame: np.ndarray | None
+    """(H, W, 3) uint8 RGB, the last frame in which the object was found; None when not tracked."""
+    u: np.ndarray
+    """(n,) image column of the track, pixels."""
+    v: np.ndarray
+    """(n,) image row of the track, pixels."""
+    status: np.ndarray
+    """(n,) per frame: 1 measured, 2 filled by interpolation, 0 missing."""
+
+
+@dataclass(frozen=True)
+class HeightSeries:
+    """One video's tracked height as the classifier sees it (the paper's Figure 5)."""
+
+    group: Literal["rendered", "real"]
+    """Which set of videos."""
+    label: str
+    """Its true class."""
+    t: np.ndarray
+    """(T,) seconds."""
+    z: np.ndarray
+    """(T,) metres: resampled to the model's frame rate, cut or zero-padded to its input."""
+
+
+def filmstrip(v: Video, title: str, n: int = FILM_FRAMES, seconds: float = FILM_SECONDS) -> Filmstrip:
+    """``n`` frames evenly spread over the first ``seconds`` of ``v``."""
+    info = video.probe(v.path)
+    picks = np.linspace(0, min(info.frames, round(seconds * info.fps)) - 1, n).round().astype(int)
+    frames = video.read_frames(v.path, picks)
+    return Filmstrip(title, tuple(f"{i / info.fps:.2f} s" for i in picks), np.stack([frames[i] for i in picks]))
+
+
+def track_view(v: Video, tracked: Tracked, title: str) -> TrackView:
+    """The track of ``v`` over its last tracked frame."""
+    traj = tracked.trajectory
+    if traj is None:
+        empty = np.zeros(0)
+        return TrackView(f"{title}: not tracked", None, empty, empty, empty.astype(int))
+    last = int(np.flatnonzero(traj.status > 0)[-1])
+    return TrackView(title, video.read_frames(v.path, [last])[last], traj.u, traj.v, traj.status)
+
+
+def heights(model: Model, group: Literal["rendered", "real"], videos: Sequence[Video],
+            tracks: dict[str, Tracked]) -> list[HeightSeries]:
+    """The model's input height of every tracked video of ``videos``."""
+    out = []
+    for v in videos:
+        traj = tracks[v.path.name].trajectory
+        if traj is not None:
+            z = track.to_model_input(traj, model.fps, model.n_frames, rest_height=v.rest_height)[:, 2]
+            out.append(HeightSeries(group, v.label, np.arange(len(z)) / model.fps, z))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# The experiment's steps
+
+
+def candidates(runner: Runner) -> dict[str, TrainConfig]:
+    """The four Z models a camera could use: the paper's network reading positions (Table 1's point) or positions
+    and velocity (its own grid's point), each trained on exact positions or on random observations."""
+    return runner.candidates({"positions": runner.table1_config(), "velocity": runner.table1_config("velocity")})
+
+
+def recommend(runner: Runner) -> Recommendation:
+    """Of :func:`candidates` (seed 0, trained together), the one with the highest accuracy on the validation throws
+    observed as the tracker observes them (``Runner.recommended``; never the test split or the videos)."""
+    cands = candidates(runner)
+    runner.prefetch([(runner, [dataclasses.replace(c, seed=0) for c in cands.values()], False)], desc="candidates")
+    return runner.recommended(cands)
+
+
+def scale_sweep(model: Model, rendered: Sequence[Video], real: Sequence[Video], tracks_rendered: dict[str, Tracked],
+                tracks_real: dict[str, Tracked], factors: Sequence[float] = FACTORS) -> Table:
+    """Every video classified again with its heights multiplied by each of ``factors`` (a wrong pixel scale)."""
+    rows = []
+    for f in factors:
+        a = per_class_interval(classify(model, rendered, tracks_rendered, height_factor=f, progress=False))
+        ar = per_class_interval(classify(model, real, tracks_real, height_factor=f, progress=False))
+        rows.append({"factor": f"{f:g}", "light": _pct_ci(a["light"]), "heavy": _pct_ci(a["heavy"]),
+                     "real": _pct_ci(ar["light"])})
+    return Table(rows, {"factor": "scale × factor", "light": "rendered light", "heavy": "rendered heavy",
+                        "real": "real balls (light)"})
+
+
+def _pct_ci(iv: Interval | None) -> str:
+    return "—" if iv is None else pct_ci(iv)
+
+
+def _classified(name: str, rendered: Sequence[Label], real: Sequence[Label]) -> Classified:
+    def numbers(labels: Sequence[Label], where: str, what: str) -> dict[Class, Number]:
+        return {c: number(iv, what.format(c=c), paper=paper.REAL_WORLD[c],
+                          decision=verdicts.not_comparable(WHY_NOT_COMPARABLE[where]))
+                for c, iv in per_class_interval(labels).items() if iv is not None}  # type: ignore[misc]
+
+    return Classified(numbers(rendered, "rendered", "rendered {c} videos classified correctly, " + name),
+                      numbers(real, "real", "real clips ({c}) classified correctly, " + name))
+
+
+def _figures() -> dict[str, Verdict]:
+    judged = {
+        "figure1": ("frames of a light object bouncing and a heavy one landing: shown for rendered throws of both "
+                    "classes and for real tennis balls; no real heavy object, since no such footage is public",
+                    "the paper's Figure 1: frames of a light and a heavy object"),
+        "figure5": ("tracked height series of real videos of both classes: shown for rendered throws of both classes "
+                    "and for real tennis balls (light only)",
+                    "the paper's Figure 5: tracked heights of the real videos"),
+        "figure6": ("real video frames with the object tracked: the whole track drawn on the last tracked frame of "
+                    "each rendered and real video", "the paper's Figure 6: frames of the real videos, tracked"),
+    }
+    return {k: Verdict(verdicts.qualitative(criterion), what) for k, (criterion, what) in judged.items()}
+
+
+# ---------------------------------------------------------------------------------------------
+# The chapter's result
+
+
+@dataclass(frozen=True)
+class RealWorld:
+    """Everything the chapter shows: its numbers, its tables and sentences, its figures' data."""
+
+    numbers: Numbers
+    """What the chapter reports (the results file's ``realworld.*``)."""
+    rendered: tuple[Video, ...]
+    """The rendered videos, light and heavy."""
+    real: tuple[Video, ...]
+    """The real clips (none without footage)."""
+    recommendation: Recommendation
+    """The candidates' validation accuracies and the model chosen."""
+    pixel_error: PixelError
+    """The tracker against the rendered ground truth."""
+    filmstrips: tuple[Filmstrip, ...]
+    """Figure 1: a rendered light and heavy throw and, with footage, the sharpest real clip."""
+    track_views: tuple[TrackView, ...]
+    """Figure 6: the rendered light and heavy throw and the first two real clips, tracked."""
+    heights: tuple[HeightSeries, ...]
+    """Figure 5: every tracked video's height as the classifier sees it."""
+    val_table: Table
+    """Each candidate's observed validation accuracy, the chosen one marked."""
+    acc_table: Table
+    """Each model's accuracy per class, rendered and real, beside the paper's."""
+    real_table: Table
+    """Table 1's model on each real clip."""
+    every_table: Table
+    """Every candidate's label for every video."""
+    sweep_table: Table
+    """The labels with the pixel scale multiplied by each of :data:`FACTORS`."""
+    n_rendered: int
+    """Rendered videos per class."""
+    n_real: int
+    """Real clips classified."""
+    model_frames: int
+    """The classifier's input length, frames."""
+    model_seconds: str
+    """The same in seconds, as the text writes it."""
+    render_size: str
+    """Width × height of the rendered videos, pixels."""
+    scale_err: str
+    """Median relative error of the pixel scale read off the rendered object's apparent size."""
+
+    # Sentences whose words depend on the numbers -------------------------------------------------
+
+    @property
+    def err_mean(self) -> str:
+        return f"{self.pixel_error.mean_px:.1f}"
+
+    @property
+    def err_p95(self) -> str:
+        return f"{self.pixel_error.p95_px:.1f}"
+
+    @property
+    def found_rendered(self) -> str:
+        return pct(self.pixel_error.found)
+
+    @property
+    def choice_text(self) -> str:
+        if "recommended" in self.numbers.models:
+            return f"the recommended one, {self.recommendation.choice}"
+        return "the recommended one, which is Table 1's model itself"
+
+    @property
+    def real_words(self) -> str:
+        real = self.numbers.models["table1"].real
+        if not real:
+            return "no real clips were found to classify"
+        return "; ".join(f"of the real clips ({c}), it labels {pct_ci(n.interval)} correctly" for c, n in real.items())
+
+
+def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = None) -> RealWorld:
+    """The chapter *Real-world test* on ``runner``'s preset: its rendered throws and the ``real`` clips
+    (:func:`real_clips`), classified by Table 1's Z model (seed 0) or by ``model`` if given, and by the model
+    :func:`recommend` chooses. Every run is cached; the videos are rendered and tracked once."""
+    tm = model if model is not None else runner.trained(runner.table1_config())  # Table 1's Z model, seed 0
+    rendered, rcfg = runner.rendered()
+    real = list(real)
+    pixel = tracking_error(rendered)
+    tracks_r, tracks_q = track_all(rendered, progress=False), track_all(real, progress=False)
+    rec = recommend(runner)
+    models: dict[ModelKey, tuple[str, Model]] = {"table1": ("Table 1's Z model", tm)}
+    if rec.choice != "positions, exact" or model is not None:  # otherwise the recommended model is Table 1's
+        models["recommended"] = (f"recommended ({rec.choice})", rec.model)
+    labels = {key: (classify(m, rendered, tracks_r, progress=False), classify(m, real, tracks_q, progress=False))
+              for key, (_, m) in models.items()}
+    numbers = reported(rec, {key: (models[key][0], *labels[key]) for key in models})
+    classified = numbers.models
+
+    light = next(v for v in rendered if v.label == "light")
+    heavy = next(v for v in rendered if v.label == "heavy")
+    strips = [filmstrip(light, "light (rendered)"), filmstrip(heavy, "heavy (rendered)")]
+    if real:
+        clip = max(real, key=lambda v: video.probe(v.path).height)  # the sharpest real clip
+        strips.append(filmstrip(clip, f"{clip.label} (real: {clip.path.name})"))
+    shown = [("rendered light", light, tracks_r), ("rendered heavy", heavy, tracks_r)]
+    shown += [(f"real: {v.path.name}", v, tracks_q) for v in real[:2]]
+    n = runner.preset.videos_per_class
+    return RealWorld(
+        numbers, tuple(rendered), tuple(real), rec, pixel, tuple(strips),
+        tuple(track_view(v, tracks[v.path.name], title) for title, v, tracks in shown),
+        tuple(heights(tm, "rendered", rendered, tracks_r) + heights(tm, "real", real, tracks_q)),
+        _val_table(rec),
+        _acc_table({models[k][0]: (classified[k], labels[k][1]) for k in models}, n),
+        _real_table(labels["table1"][1]),
+        _every_table(rec, rendered, real, tracks_r, tracks_q),
+        scale_sweep(tm, rendered, real, tracks_r, tracks_q),
+        n_rendered=n, n_real=len(real), model_frames=tm.n_frames, model_seconds=f"{tm.n_frames / tm.fps:g}",
+        render_size=f"{rcfg.width}×{rcfg.height}", scale_err=pct(scale_error(tracks_r.values(), true_scale(rcfg))))
+
+
+def reported(rec: Recommendation,
+             labels: dict[ModelKey, tuple[str, Sequence[Label], Sequence[Label]]]) -> Numbers:
+    """What the chapter reports: each candidate's validation accuracy (``rec``), the paper's figures judged, and
+    each model's accuracy per class from its ``labels`` (model key -> (its name, its labels of the rendered
+    videos, of the real clips))."""
+    judged = _figures()
+    return Numbers(_candidates(rec), judged["figure1"], judged["figure5"], judged["figure6"],
+                   {key: _classified(name, rendered, real) for key, (name, rendered, real) in labels.items()})
+
+
+def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
+    out: dict[str, dict[str, Candidate]] = {}
+    for name, iv in rec.val.items():
+        inputs, training = name.split(", ")  # "positions, exact" (Runner.candidates)
+        out.setdefault(inputs, {})[training] = Candidate(
+            number(iv, f"validation accuracy under the calibrated observation, {name}"))
+    return out  # type: ignore[return-value]
+
+
+# ---------------------------------------------------------------------------------------------
+# The tables
+
+
+def _val_table(rec: Recommendation) -> Table:
+    rows = [{"model": n, "val": pct_ci(iv), "chosen": "✓" if n == rec.choice else ""} for n, iv in rec.val.items()]
+    return Table(rows, {"model": "candidate (Z, seed 0)", "val": "observed validation accuracy [95 % CI]",
+                        "chosen": "chosen"})
+
+
+def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered: int) -> Table:
+    """Each model (by name: its numbers and its labels of the real clips), per class, beside the paper's."""
+    rows = []
+    for name, (numbers, real) in models.items():
+        for c in CLASSES:
+            rendered, on_real = numbers.rendered.get(c), numbers.real.get(c)  # type: ignore[call-overload]
+            rows.append({"model": name, "class": c,
+                         "paper": f"{pct(paper.REAL_WORLD[c], 0)} ({paper.REAL_OBJECTS[c]}, real)",
+                         "rendered": "—" if rendered is None else pct_ci(rendered.interval),
+                         "verdict": "—" if rendered is None else rendered.verdict,
+                         "real": "no footage" if on_real is None else
+                         f"{pct_ci(on_real.interval)} (tennis balls, n = {sum(r.label == c for r in real)})"})
+    return Table(rows, {"model": "model", "class": "class", "paper": "paper",
+                        "rendered": f"ours, rendered ({n_rendered} per class) [95 % Wilson]",
+                        "verdict": "paper vs ours", "real": "ours, real [95 % Wilson]"})
+
+
+def _real_table(labels: Sequence[Label]) -> Table:
+    rows = [{"file": r.file, "found": pct(r.found, 0) if r.tracked else "—",
+             "pieces": r.pieces if r.tracked else "—", "bounces": r.bounces if r.tracked else "—",
+             "p_light": f"{r.p_light:.2f}" if r.tracked else "—",
+             "label": r.predicted if r.tracked else "not tracked: " + r.error} for r in labels]
+    return Table(rows, {"file": "file", "found": "found", "pieces": "pieces", "bounces": "bounces",
+                        "p_light": "p_light", "label": "label (Table 1's model)"}, empty="*No real clips were found.*")
+
+
+def _every_table(rec: Recommendation, rendered: Sequence[Video], real: Sequence[Video],
+                 tracks_rendered: dict[str, Tracked], tracks_real: dict[str, Tracked]) -> Table:
+    labels = {n: classify(m, rendered, tracks_rendered, progress=False) + classify(m, real, tracks_real, progress=False)
+              for n, m in rec.models.items()}
+    rows = []
+    for i, v in enumerate(list(rendered) + list(real)):
+        first = labels[rec.choice][i]
+        row = {"video": ("real: " if i >= len(rendered) else "") + v.path.name, "label": v.label,
+               "found": pct(first.found, 0) if first.tracked else "not tracked"}
+        for n in rec.models:
+            r = labels[n][i]
+            row[n] = f"{r.predicted} ({r.p_light:.2f})" if r.tracked else "—"
+        rows.append(row)
+    return Table(rows, {"video": "video", "label": "true class", "found": "found", **{n: n for n in rec.models}})

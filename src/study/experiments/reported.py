@@ -27,6 +27,7 @@ from __future__ import annotations
 import dataclasses
 import fnmatch
 import math
+import re
 import types
 import typing
 from collections.abc import Iterator, Mapping
@@ -224,26 +225,28 @@ def _read(hint: Any, stored: Mapping[str, Leaf], base: str, pattern: str, owner:
         key_hint, value_hint = args
         if typing.get_origin(key_hint) is typing.Literal:
             keys = [str(k) for k in typing.get_args(key_hint) if _present(stored, _key_path(base, pattern, str(k)))]
-        elif key_hint is str and "{key}" not in pattern:
-            keys = _scan(stored, name, value_hint in (Number, Verdict), siblings if not pattern else set())
+        elif key_hint is str:
+            keys = _scan(stored, base, pattern, value_hint in (Number, Verdict), siblings if not pattern else set())
         else:
-            raise ConfigError(f"{owner.__name__}: dict field {name!r} needs Literal keys (or str keys in a segment of "
-                              "their own) to be read back")
+            raise ConfigError(f"{owner.__name__}: dict field {name!r} needs str or Literal keys to be read back")
         return {k: _read(value_hint, stored, _key_path(base, pattern, k), "", owner) for k in keys}
     raise ConfigError(f"{owner.__name__}: field {name!r} of type {hint!r} cannot be read from a results file")
 
 
-def _scan(stored: Mapping[str, Leaf], name: str, leafy: bool, siblings: set[str]) -> list[str]:
-    """The path segments that follow ``name`` in ``stored``, in order (for leaves: the last segment)."""
+def _scan(stored: Mapping[str, Leaf], base: str, pattern: str, leafy: bool, siblings: set[str]) -> list[str]:
+    """The keys of a dict stored at ``base`` + ``pattern`` (see :func:`_key_path`), in order of first appearance:
+    for leaves, names that end at the key; otherwise names that go on after it. Keys that are the names of the
+    owner's other fields (``siblings``, patterns) are not keys."""
+    where = re.escape(_key_path(base, pattern, "\0")).replace(re.escape("\0"), "(?P<key>[^.]+)")
+    found = re.compile(where + ("$" if leafy else r"\."))
     keys: list[str] = []
     for k in stored:
-        if not k.startswith(name + "."):
+        m = found.match(k)
+        if m is None:
             continue
-        rest = k[len(name) + 1:]
-        key = rest if leafy else rest.split(".")[0]
-        if (leafy and "." in rest) or key in keys or any(fnmatch.fnmatchcase(key, s) for s in siblings):
-            continue
-        keys.append(key)
+        key = m.group("key")
+        if key not in keys and not any(fnmatch.fnmatchcase(key, s) for s in siblings):
+            keys.append(key)
     return keys
 
 

@@ -26,19 +26,38 @@ from typing import Any
 import numpy as np
 
 from study.core import cache
-from study.experiments import paper, realworld, runs
+from study.experiments import paper, realworld, runs, tracker
 from study.experiments.presets import Preset, preset
 from study.experiments.runtable import Fitted, Run, Runs
 from study.experiments.stats import scored
+from study.experiments.tracker import TrackerError
 from study.learn import baseline, train
 from study.learn.config import Cell, Dims, Inputs, TrainConfig
 from study.learn.metrics import Interval
+from study.see.config import TrackConfig
 from study.simulate import data, observe, synth
 from study.simulate.data import Dataset
 
 
 OBSERVED_SEEDS: dict[str, int] = {"test": 3, "train": 4}
 """Seeds of the one observed draw of each split that chapters score learners on alike (:meth:`Runner.observed`)."""
+
+
+@dataclass(frozen=True)
+class Recommendation:
+    """The Z model a camera in a car should use (:meth:`Runner.recommended`), chosen on observed validation throws."""
+
+    choice: str
+    """The chosen candidate's name (``"positions, exact"`` and so on, :meth:`Runner.candidates`)."""
+    val: dict[str, Interval]
+    """Each candidate's accuracy on the observed validation throws, with its bootstrap interval."""
+    models: dict[str, train.TrainedModel]
+    """Each candidate's trained model."""
+
+    @property
+    def model(self) -> train.TrainedModel:
+        """The chosen model."""
+        return self.models[self.choice]
 
 
 @dataclass(frozen=True)
@@ -196,7 +215,7 @@ class Runner:
         return out
 
     # -----------------------------------------------------------------------------------------
-    # The camera: rendered throws, the tracker's calibration, the model a car would use
+    # The camera: rendered throws, the tracker's error, the model a car would use
 
     def rendered(self) -> tuple[list[realworld.Video], Any]:
         """The real-world chapter's rendered throws at the data's frame rate, as long as Table 1's input (the
@@ -204,32 +223,28 @@ class Runner:
         return realworld.book_set(self.preset.name, self.fps, self.preset.length, self.render_seed, self.data_dir)
 
     @cached_property
-    def _calibration(self) -> dict[str, float]:
-        from study.experiments import cues
-        from study.see import config as track_config
-
+    def _tracker_error(self) -> TrackerError:
         videos, _ = self.rendered()
         key = cache.key({"videos": sorted({v.path.parent.name for v in videos}), "n": len(videos),
-                         "track": dataclasses.asdict(track_config.TrackConfig(color=videos[0].color, progress=False)),
-                         "code": cache.source_hash(*cache.subpackage_files("see"), "experiments/cues.py")})
-        path = self.data_dir / "observation" / f"calibration-{key}.json"
+                         "track": dataclasses.asdict(TrackConfig(color=videos[0].color, progress=False)),
+                         "code": cache.source_hash(*cache.subpackage_files("see"), "experiments/tracker.py")})
+        path = self.data_dir / "observation" / f"tracker-error-{key}.json"
         try:
-            return json.loads(path.read_text())
-        except (OSError, ValueError):
+            return TrackerError.from_json(json.loads(path.read_text()))
+        except (OSError, ValueError, KeyError):
             pass  # not measured yet, or damaged: measure again
-        cal = cues.observation_calibration(videos)
-        cache.write_text_atomic(path, json.dumps(cal, indent=1) + "\n")
-        return cal
+        error = tracker.measure(videos)
+        cache.write_text_atomic(path, json.dumps(error.to_json(), indent=1) + "\n")
+        return error
 
-    def calibration(self) -> dict[str, float]:
-        """The tracker's error on the rendered throws (``study.experiments.cues.observation_calibration``),
-        measured once per build and cached by the videos' key, the tracker's settings and the tracker's code."""
-        return dict(self._calibration)
+    def tracker_error(self) -> TrackerError:
+        """The tracker's error on the rendered throws (``study.experiments.tracker.measure``), measured once per
+        build and cached by the videos' key, the tracker's settings and the tracker's code."""
+        return self._tracker_error
 
     def observation(self) -> observe.Observation:
         """The calibrated observation: the tracker's noise and share of lost frames."""
-        cal = self.calibration()
-        return observe.Observation(noise=cal["noise_m"], drop=cal["drop"])
+        return self.tracker_error().observation()
 
     def observed(self, split: str, ob: observe.Observation, n_frames: int) -> np.ndarray:
         """The first ``n_frames`` of this dataset's ``split`` ('train' or 'test') as ``ob`` observes them: the one
@@ -254,13 +269,10 @@ class Runner:
         return out
 
     def recommended(self, candidates: dict[str, TrainConfig], seed: int = 0,
-                    ob: observe.Observation | None = None) -> tuple[str, dict[str, Interval], dict[str, train.TrainedModel]]:
+                    ob: observe.Observation | None = None) -> Recommendation:
         """The Z model a camera in a car should use: of ``candidates`` (name -> config; :meth:`candidates`), the
         one with the highest accuracy on ``seed``'s validation trajectories observed as the calibrated tracker
-        (or ``ob``) observes them (never the test split).
-
-        Returns ``(the chosen name, {name: validation interval}, {name: model})``.
-        """
+        (or ``ob``) observes them (never the test split)."""
         ob = ob or self.observation()
         models = {k: self.trained(dataclasses.replace(c, dims="z", seed=seed)) for k, c in candidates.items()}
         first = next(iter(candidates.values()))
@@ -269,7 +281,7 @@ class Runner:
         x_val = ob.observe(self.dataset.train.x[va, :T], self.fps, seed=6)
         val = {k: scored([m], x_val, self.dataset.train.y[va]) for k, m in models.items()}
         choice = max(val, key=lambda k: val[k].value)  # ties: the first candidate
-        return choice, val, models
+        return Recommendation(choice, val, models)
 
     def rocket(self, dims: Dims, n_frames: int, seed: int, tests: dict[str, np.ndarray],
                train_x: np.ndarray | None = None) -> dict[str, np.ndarray]:

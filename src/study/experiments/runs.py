@@ -35,6 +35,7 @@ import torch
 from study.core import cache
 from study.core.errors import ModelError, StudyError
 from study.core.progress import Progress
+from study.experiments.cluster import PLAN_ENV, default_workers, local_cluster, plan_totals
 from study.learn import native, train
 from study.learn.metrics import failed_to_train
 from study.learn.train import TrainConfig
@@ -43,20 +44,10 @@ from study.simulate.data import Dataset
 
 RUN_FORMAT = "study.run/2"
 """Format 2 added the test split's per-trajectory probabilities, the diverged epoch and the failed flag."""
-PLAN_ENV = "STUDY_PLAN_PART"
-"""Environment variable naming the file where a chapter's runs are listed (set by ``study book``)."""
 
 
 class WorkerError(StudyError):
     """A worker computes another key for the run it was sent: its code, torch or compiled loop differ."""
-
-
-def default_workers() -> int:
-    """Training processes to run at once: the CPUs this process may use (each run takes one thread)."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not on Linux
-        return max(1, os.cpu_count() or 1)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -219,10 +210,7 @@ _CLUSTERS: list = []
 def _local_cluster(workers: int) -> str:
     """The address of a ``LocalCluster`` started once per process: one single-threaded worker process per
     core, listening on the loopback address only (a Dask scheduler runs whatever code reaches it)."""
-    from distributed import LocalCluster
-
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=None)
+    cluster = local_cluster(workers)
     _CLUSTERS.append(cluster)
     return cluster.scheduler_address
 
@@ -330,21 +318,3 @@ class Plan:
     def n_models(self) -> int:
         """Distinct models: what a build from an empty cache trains."""
         return len(self.models)
-
-
-def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
-    """The distinct models listed in the plan files ``parts`` and the CPU seconds their records took to train
-    (``train_seconds`` summed; a record that is missing counts nothing)."""
-    models: dict[str, str] = {}
-    for part in parts:
-        if not part.is_file():
-            continue
-        for line in part.read_text().splitlines():
-            with contextlib.suppress(ValueError, KeyError, TypeError):
-                entry = json.loads(line)
-                models.setdefault(str(entry["model"]), str(entry["record"]))
-    seconds = 0.0
-    for record in models.values():
-        with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
-            seconds += float(json.loads(Path(record).read_text())["train_seconds"])
-    return {"models": float(len(models)), "train_seconds": seconds}

@@ -42,10 +42,26 @@ class Table:
     """Field -> header, in the order shown."""
     formats: Mapping[str, Format] = field(default_factory=dict)
     """Field -> a format spec (``".1%"``) or a function of the value; other fields are shown with ``str``."""
+    empty: str = ""
+    """Markdown shown instead when there are no rows (``""``: the header alone)."""
 
     def markdown(self) -> str:
-        """The table in Markdown."""
+        """The table in Markdown (:attr:`empty` if it has no rows and that is set)."""
+        if not self.rows and self.empty:
+            return self.empty
         return markdown(self.rows, self.columns, self.formats)
+
+
+@dataclass(frozen=True)
+class Bullets:
+    """A list a chapter's result renders: one Markdown bullet per item."""
+
+    items: Sequence[str]
+    """The items, in order (Markdown)."""
+
+    def markdown(self) -> str:
+        """The list in Markdown."""
+        return "\n".join(f"- {item}" for item in self.items)
 
 
 def pct(x: float, digits: int = 1) -> str:

@@ -32,7 +32,7 @@ def fill_gaps(traj: Trajectory, max_gap: int) -> Trajectory:
     return replace(traj, u=uv[:, 0], v=uv[:, 1], status=status, segment=seg)
 
 
-def calibrate(
+def set_scale(
     traj: Trajectory,
     *,
     ground_v: float | None = None,
@@ -51,7 +51,7 @@ def calibrate(
     """
     m = traj.status > 0
     if not m.any():
-        raise TrackingError(f"{traj.source}: no tracked frames to calibrate")
+        raise TrackingError(f"{traj.source}: no tracked frames to set the scale from")
     g = float(np.nanmax(traj.v[m])) if ground_v is None else float(ground_v)
     if metres_per_pixel is not None:
         check_range("metres_per_pixel", metres_per_pixel, 0.0, 100.0, lo_open=True)

@@ -2,7 +2,7 @@
 input out.
 
 :func:`track_video` detects the object in every frame (``study.see.detect``), fills short gaps and
-splits at long ones, and calibrates pixels to metres (``study.see.gaps``); :func:`to_model_input`
+splits at long ones, and sets the scale from pixels to metres (``study.see.gaps``); :func:`to_model_input`
 resamples the result to the classifier's frame rate and cuts or zero-pads it to its input length, as
 the paper did. The pieces are importable from here too, so ``from study import track`` gives the whole
 tracker: :class:`TrackConfig` and the colour presets (``study.see.config``), :class:`Trajectory`
@@ -19,13 +19,13 @@ import numpy as np
 from study.core.errors import TrajectoryError, check_range
 from study.see.config import PRESETS, TrackConfig, parse_hsv
 from study.see.detect import detect_all
-from study.see.gaps import calibrate, fill_gaps, resample
+from study.see.gaps import fill_gaps, resample, set_scale
 from study.see.overlay import write_overlay
 from study.see.trackfile import read_csv, write_csv
 from study.see.trajectory import STATUS, Trajectory
 
-__all__ = ["PRESETS", "STATUS", "TrackConfig", "Trajectory", "calibrate", "detect_all", "fill_gaps", "parse_hsv",
-           "read_csv", "resample", "to_model_input", "track_video", "write_csv", "write_overlay"]
+__all__ = ["PRESETS", "STATUS", "TrackConfig", "Trajectory", "detect_all", "fill_gaps", "parse_hsv",
+           "read_csv", "resample", "set_scale", "to_model_input", "track_video", "write_csv", "write_overlay"]
 
 
 def track_video(
@@ -36,10 +36,10 @@ def track_video(
     object_size: float | None = None,
     metres_per_pixel: float | None = None,
 ) -> Trajectory:
-    """Track, fill short gaps, split at long ones and calibrate: the whole pipeline for one video."""
+    """Track, fill short gaps, split at long ones and set the scale: the whole pipeline for one video."""
     cfg = cfg or TrackConfig()
     traj = fill_gaps(detect_all(path, cfg), cfg.max_gap)
-    return calibrate(traj, ground_v=ground_v, object_size=object_size, metres_per_pixel=metres_per_pixel)
+    return set_scale(traj, ground_v=ground_v, object_size=object_size, metres_per_pixel=metres_per_pixel)
 
 
 def to_model_input(

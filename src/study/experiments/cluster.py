@@ -1,0 +1,52 @@
+"""Where runs are trained, without torch (so the book's builder and the command line can import it cheaply): how
+many local processes, a Dask ``LocalCluster`` set up the one way the study starts one, and the file a chapter
+lists its runs in for the builder to count them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+PLAN_ENV = "STUDY_PLAN_PART"
+"""Environment variable naming the file where a chapter's runs are listed (set by ``study book``; written by
+``study.experiments.runs.Plan``)."""
+
+
+def default_workers() -> int:
+    """Training processes to run at once: the CPUs this process may use (each run takes one thread)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def local_cluster(workers: int) -> Any:
+    """A Dask ``LocalCluster`` of ``workers`` single-threaded worker processes, listening on the loopback address
+    only (a Dask scheduler runs whatever code reaches it), without a dashboard."""
+    from distributed import LocalCluster  # Dask is imported only where a cluster is asked for
+
+    return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                        dashboard_address=None)
+
+
+def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
+    """The distinct models listed in the plan files ``parts`` and the CPU seconds their records took to train
+    (``train_seconds`` summed; a record that is missing counts nothing)."""
+    models: dict[str, str] = {}
+    for part in parts:
+        if not part.is_file():
+            continue
+        for line in part.read_text().splitlines():
+            with contextlib.suppress(ValueError, KeyError, TypeError):
+                entry = json.loads(line)
+                models.setdefault(str(entry["model"]), str(entry["record"]))
+    seconds = 0.0
+    for record in models.values():
+        with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
+            seconds += float(json.loads(Path(record).read_text())["train_seconds"])
+    return {"models": float(len(models)), "train_seconds": seconds}

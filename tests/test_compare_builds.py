@@ -1,0 +1,61 @@
+"""scripts/compare_builds.py pairs the numbers of two builds whatever their results format and still catches a
+number that moved (or a verdict that changed) after the second format renamed the motion chapter's learners."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+from study.book import results
+from study.experiments import reported, verdicts
+from study.learn.metrics import Interval
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "compare_builds.py"
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("compare_builds", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _old_build(root: Path, value: float = 0.7) -> None:
+    """A build of the first results format, under the old learner names."""
+    (root / "_build").mkdir(parents=True)
+    (root / "data" / "runs").mkdir(parents=True)
+    entries = [
+        {"name": "motion.lstm_positions.air_on.exact", "value": value, "lo": 0.68, "hi": 0.72, "method": "bootstrap",
+         "chapter": "motion", "what": "peephole LSTM, positions", "unit": "fraction", "paper": None, "verdict": None,
+         "source": {"seeds": [0, 1, 2]}, "decision": None},
+        {"name": "table1.verdict", "value": float("nan"), "lo": float("nan"), "hi": float("nan"), "method": "verdict",
+         "chapter": "table1", "what": "Table 1", "unit": "verdict", "paper": None, "verdict": "qualitative",
+         "source": {}, "decision": {"rule": "qualitative", "criterion": "by eye"}},
+    ]
+    (root / "_build" / "results.json").write_text(json.dumps({"format": "study.results/1", "numbers": entries}))
+
+
+def _new_build(root: Path, value: float = 0.7, verdict: verdicts.Decision | None = None) -> None:
+    (root / "_build").mkdir(parents=True)
+    (root / "data" / "runs").mkdir(parents=True)
+    leaves = [("motion.peephole_positions.air_on.exact",
+               reported.number(Interval(value, 0.68, 0.72, "bootstrap"), "peephole LSTM, positions", seeds=[0, 1, 2])),
+              ("table1.verdict", reported.Verdict(verdict or verdicts.qualitative("by eye"), "Table 1"))]
+    (root / "_build" / "results.json").write_text(results.dumps(leaves, preset="smoke"))
+
+
+def test_the_same_numbers_across_the_formats_compare_equal(tmp_path):
+    _old_build(tmp_path / "a")
+    _new_build(tmp_path / "b")
+    assert _script().main([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
+
+
+def test_a_moved_number_or_a_changed_verdict_is_caught(tmp_path, capsys):
+    _old_build(tmp_path / "a")
+    _new_build(tmp_path / "b", value=0.71)
+    assert _script().main([str(tmp_path / "a"), str(tmp_path / "b")]) == 1
+    assert "differs: motion.peephole_positions.air_on.exact" in capsys.readouterr().out
+    _new_build(tmp_path / "c", verdict=verdicts.not_comparable("another kind"))
+    assert _script().main([str(tmp_path / "a"), str(tmp_path / "c")]) == 1
+    assert "differs: table1.verdict" in capsys.readouterr().out
