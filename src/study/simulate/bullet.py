@@ -57,6 +57,7 @@ import functools
 import importlib.metadata
 import math
 import multiprocessing
+import os
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
@@ -65,9 +66,10 @@ import numpy as np
 
 from study.core.errors import ConfigError
 from study.core.progress import Progress
-from study.simulate.checks import Trace
+from study import CLASSES
+from study.simulate.config import GRAVITY, SynthConfig, staggered_qvel
 from study.simulate.scene import Shape
-from study.simulate.synth import GRAVITY, SynthConfig, staggered_qvel
+from study.simulate.trace import Trace
 
 
 def _import_quietly():
@@ -342,7 +344,7 @@ def flight(cfg: SynthConfig, qpos0: np.ndarray, qvel0: np.ndarray, duration: flo
 
 def trace(cfg: SynthConfig, params: dict[str, np.ndarray], i: int, duration: float | None = None, *,
           timestep: float = TIMESTEP) -> Trace:
-    """Throw ``i`` of ``params`` step by step, with the diagnostics of :class:`study.simulate.checks.Trace`.
+    """Throw ``i`` of ``params`` step by step, with the diagnostics of :class:`study.simulate.trace.Trace`.
 
     Speed and energy use the velocity at the position's time, the mean of Bullet's velocities over the
     steps before and after it (each is the velocity of a step, half a step away from the positions):
@@ -529,3 +531,27 @@ def friction_setting(mu: np.ndarray | float, shape: Shape, *, timestep: float = 
     Raises :class:`ConfigError` naming ``friction`` outside the calibrated range.
     """
     return _invert("friction", mu, friction_table(shape, timestep), f"a sliding {shape.kind}")
+
+
+def check_restitutions(cfg: SynthConfig) -> None:
+    """Raise :class:`ConfigError` if a class asks for a restitution Bullet's flat drops cannot give for this
+    shape."""
+    lo, hi = restitution_range(cfg.shape)
+    for name in CLASSES:
+        r = cfg.prior(name).restitution
+        if r[0] < lo or r[1] > hi:
+            raise ConfigError(f"SynthConfig.{name}.restitution = {r!r} leaves Bullet's calibrated range "
+                              f"[{lo:.3f}, {hi:.3f}] for this shape; narrow it")
+
+
+def versions() -> dict[str, str]:
+    """The library versions that can change Bullet's numbers."""
+    return {"pybullet": importlib.metadata.version("pybullet"), "numpy": np.__version__}
+
+
+def simulate_split(cfg: SynthConfig, params: dict[str, np.ndarray], threads: int | None, progress: bool,
+                   desc: str) -> np.ndarray:
+    """A split's throws in Bullet, as ``study.simulate.synth`` asks every engine for them: (n, T, 3) float64
+    centre positions, metres, on ``threads`` worker processes (None: one per core)."""
+    return simulate(cfg, params, processes=(os.cpu_count() or 1) if threads is None else threads, progress=progress,
+                    desc=f"{desc} (Bullet)")

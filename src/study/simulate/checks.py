@@ -7,21 +7,15 @@ timestep convergence of the measured restitution, and what letting resting objec
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
 from study.simulate import measure
-from study.simulate.contact import damping_for_restitution, drop_test
-from study.simulate.synth import (
-    GRAVITY,
-    SynthConfig,
-    build_model,
-    initial_data,
-    simulate,
-    staggered_qvel,
-)
+from study.simulate.contact import damping_for_restitution, drop_test, measured_restitution
+from study.simulate.config import GRAVITY, SynthConfig, staggered_qvel
+from study.simulate.mujoco_sim import build_model, initial_data, simulate
+from study.simulate.trace import Trace
 
 
 def free_flight_error(cfg: SynthConfig, qpos0: np.ndarray, qvel0: np.ndarray, duration: float = 1.0,
@@ -58,37 +52,6 @@ def restitution_from_drops(cfg: SynthConfig, restitution: float, *, drop: float 
     return np.sqrt(h[1:] / h[:-1])
 
 
-@dataclass
-class Trace:
-    """Every step of one simulated throw (SI units)."""
-
-    t: np.ndarray
-    """(N,) seconds."""
-    pos: np.ndarray
-    """(N, 3) centre position, metres."""
-    speed: np.ndarray
-    """(N,) centre speed, m/s."""
-    in_contact: np.ndarray
-    """(N,) bool: at least one contact with the ground."""
-    depth: np.ndarray
-    """(N,) deepest penetration into the ground, metres (0 when not touching)."""
-    energy: np.ndarray
-    """(N,) mechanical energy m g z + translational + rotational kinetic, joules."""
-
-    def flight_energies(self, min_steps: int = 20) -> np.ndarray:
-        """Mean mechanical energy of each flight phase (a run of >= ``min_steps`` steps without contact), J."""
-        out, start = [], None
-        free = ~self.in_contact
-        for i, f in enumerate(np.append(free, False)):
-            if f and start is None:
-                start = i
-            elif not f and start is not None:
-                if i - start >= min_steps:
-                    out.append(float(self.energy[start:i].mean()))
-                start = None
-        return np.array(out)
-
-
 def trace(cfg: SynthConfig, params: dict[str, np.ndarray], i: int, duration: float | None = None) -> Trace:
     """Simulate trajectory ``i`` of a split's ``params`` step by step and record diagnostics."""
     m, d = initial_data(cfg, params, i)
@@ -113,8 +76,6 @@ def convergence(cfg: SynthConfig, restitutions: np.ndarray) -> dict[str, np.ndar
 
     Returns ``{"set": e, "dt": measured at dt, "dt/2": measured at dt/2}``, each (k,).
     """
-    from study.simulate.contact import measured_restitution
-
     dt = cfg.timestep
     b = damping_for_restitution(np.asarray(restitutions), cfg.shape, stiffness=cfg.stiffness, timestep=dt)
     at = lambda step: np.array([measured_restitution(cfg.shape, x, stiffness=cfg.stiffness, timestep=step) for x in b])  # noqa: E731
