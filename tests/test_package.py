@@ -32,12 +32,53 @@ def test_a_change_inside_a_subpackage_changes_the_code_keys(tmp_path):
     assert cache.source_hash("learn/peephole.cpp", root=copy) != before_loop
 
 
-def test_the_run_keys_follow_the_training_code():
-    from study.learn import train
+def _copy_package(tmp_path) -> Path:
+    copy = tmp_path / "study"
+    shutil.copytree(cache.PACKAGE_DIR, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    return copy
 
-    names = set(train.SOURCES)
-    assert {"learn.model", "learn.train", "learn.config", "learn/peephole.cpp", "learn/gru.cpp"} <= names
-    cache.source_hash(*train.SOURCES)  # every name resolves to a file
+
+def _append(copy: Path, rel: str) -> None:
+    with (copy / rel).open("a") as f:
+        f.write("\n// an edit\n" if rel.endswith((".cpp", ".h")) else "\n# an edit\n")
+
+
+def test_every_key_follows_the_code_its_producer_imports(tmp_path):
+    """For every cached product: an edit (a comment appended) to any file of its producer's import closure changes
+    its code key; to an exempt module, or to a module outside the closure, it does not."""
+    copy = _copy_package(tmp_path)
+    for product, (module, extra) in cache.PRODUCERS.items():
+        files = sorted(set(cache.closure(module, root=copy)) | set(extra))
+        assert module.replace("study.", "").replace(".", "/") + ".py" in files
+        for rel in files:
+            before = cache.code_hash(product, root=copy)
+            _append(copy, rel)
+            assert cache.code_hash(product, root=copy) != before, f"{product}: an edit to {rel} leaves its key"
+        for rel in cache.EXEMPT:
+            before = cache.code_hash(product, root=copy)
+            _append(copy, rel)
+            assert cache.code_hash(product, root=copy) == before, f"{product}: the exempt {rel} changes its key"
+
+
+def test_the_run_closure_holds_what_makes_a_record_and_the_engines_stay_apart():
+    run = set(cache.closure(cache.PRODUCERS["run"][0]))
+    for rel in ("learn/train.py", "learn/stack.py", "learn/model.py", "learn/peephole.py", "learn/gru.py",
+                "learn/native.py", "learn/peephole.cpp", "learn/rnn_math.h", "learn/metrics.py", "learn/config.py",
+                "simulate/observe.py", "simulate/data.py", "core/cache.py", "experiments/runs.py"):
+        assert rel in run, f"a run's key leaves out {rel}"
+    assert "core/errors.py" not in run and "core/progress.py" not in run, "exempt: they cannot change a record"
+    mujoco = set(cache.closure(cache.PRODUCERS["dataset-mujoco"][0]))
+    bullet = set(cache.closure(cache.PRODUCERS["dataset-bullet"][0]))
+    assert "simulate/bullet.py" not in mujoco and "simulate/mujoco_sim.py" not in bullet
+    assert {"simulate/config.py", "simulate/contact.py"} <= mujoco & bullet
+    assert "simulate/contact.py" in set(cache.closure(cache.PRODUCERS["video"][0])), "a throw's damping"
+
+
+def test_a_function_local_import_is_in_the_closure(tmp_path):
+    copy = _copy_package(tmp_path)
+    (copy / "core" / "leaf.py").write_text("X = 1\n")
+    (copy / "core" / "top.py").write_text("def f():\n    from study.core import leaf\n    return leaf.X\n")
+    assert "core/leaf.py" in cache.closure("study.core.top", root=copy)
 
 
 def test_short_names_are_the_subpackage_modules():

@@ -7,8 +7,10 @@ place, so a killed run never leaves a file that a later run would read as comple
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import dataclasses
+import functools
 import hashlib
 import json
 import os
@@ -120,3 +122,111 @@ def write_text_atomic(path: str | Path, text: str) -> None:
 def subpackage_files(name: str, root: Path = PACKAGE_DIR) -> list[str]:
     """The source files of the subpackage ``name`` (``"see"``) as :func:`source_hash` names them."""
     return [f for f in source_files(root) if f.startswith(f"{name}/")]
+
+
+# ---------------------------------------------------------------------------------------------
+# Keys from the code itself: the import closure of whatever produced a file
+
+EXEMPT: dict[str, str] = {
+    "core/errors.py": "the errors a user can fix: what is raised and how it reads, never what is computed",
+    "core/progress.py": "progress on the terminal: what is shown while a product is made, not the product",
+}
+"""Modules whose source is left out of every code key, each with the reason it cannot change a result."""
+NON_PYTHON: dict[str, tuple[str, ...]] = {
+    "learn/native.py": ("learn/peephole.cpp", "learn/gru.cpp", "learn/rnn_math.h"),
+}
+"""Source files that a module builds from rather than imports (the compiled time loops), hashed with it."""
+PRODUCERS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "run": ("study.experiments.runs", ()),
+    "dataset-mujoco": ("study.simulate.mujoco_sim", ("simulate/synth.py",)),
+    "dataset-bullet": ("study.simulate.bullet", ("simulate/synth.py",)),
+    "video": ("study.experiments.videos", ()),
+    "tracker-error": ("study.experiments.tracker", ()),
+    "minirocket": ("study.experiments.rockets", ()),
+}
+"""Each cached product: the module whose function makes it, whose import closure its key hashes
+(:func:`code_hash`), and files hashed with that closure but not followed. Runs and their models: the record a
+run writes (``study.experiments.runs``) and the training behind it. A data set: its engine's simulation, and the
+module that chooses the engine and writes the file (``simulate/synth.py``, which imports both engines: its own
+source is hashed, not the other engine's)."""
+
+
+def _module_file(module: str, root: Path) -> Path | None:
+    """The source file of ``study.<...>`` module ``module`` (a package: its ``__init__.py``), or None."""
+    parts = module.split(".")[1:]
+    base = root.joinpath(*parts)
+    for candidate in (base.with_suffix(".py"), base / "__init__.py"):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def _imported(path: Path, module: str, root: Path) -> set[str]:
+    """The ``study`` modules a source file imports, read from its syntax tree (function-local imports and the
+    packages a submodule's import runs included); parsed once per version of the file."""
+    st = path.stat()
+    return set(_imported_cached(path, module, root, st.st_mtime_ns, st.st_size))
+
+
+@functools.lru_cache(maxsize=1024)
+def _imported_cached(path: Path, module: str, root: Path, mtime_ns: int, size: int) -> frozenset[str]:
+    tree = ast.parse(path.read_text(), filename=str(path))
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join(anchor + ([base] if base else []))
+            found.add(base)
+            found.update(f"{base}.{a.name}" for a in node.names)  # a submodule, if it is one
+    out = set()
+    for name in found:
+        if name != "study" and not name.startswith("study."):
+            continue
+        parts = name.split(".")
+        for i in range(1, len(parts) + 1):  # the packages on the way run their __init__
+            prefix = ".".join(parts[:i])
+            if _module_file(prefix, root) is not None:
+                out.add(prefix)
+    return frozenset(out)
+
+
+def closure(module: str, root: Path = PACKAGE_DIR) -> list[str]:
+    """Every source file (relative, as :func:`source_hash` names them) that ``module`` (``"study.learn.train"``)
+    imports, transitively, itself included, in sorted order; with the non-Python files they build from
+    (:data:`NON_PYTHON`) and without the exempt ones (:data:`EXEMPT`)."""
+    if _module_file(module, root) is None:
+        raise ValueError(f"closure: no module {module!r} under {root}")
+    seen: set[str] = set()
+    todo = [module]
+    while todo:
+        m = todo.pop()
+        if m in seen:
+            continue
+        seen.add(m)
+        path = _module_file(m, root)
+        if path is not None:
+            todo.extend(_imported(path, m, root) - seen)
+    files = set()
+    for m in seen:
+        path = _module_file(m, root)
+        if path is None:
+            continue
+        rel = path.relative_to(root).as_posix()
+        files.add(rel)
+        files.update(NON_PYTHON.get(rel, ()))
+    return sorted(f for f in files if f not in EXEMPT)
+
+
+def code_hash(product: str, root: Path = PACKAGE_DIR) -> str:
+    """The hash of the code behind ``product`` (a key of :data:`PRODUCERS`): every file of its producer's import
+    closure. Part of that product's cache key, so an edit anywhere in that code makes new files, and an edit
+    elsewhere does not."""
+    if product not in PRODUCERS:
+        raise ValueError(f"code_hash: unknown product {product!r}; name its producer in study.core.cache.PRODUCERS")
+    module, files = PRODUCERS[product]
+    return source_hash(*sorted(set(closure(module, root)) | set(files)), root=root)

@@ -28,47 +28,42 @@ The pipeline, video by video:
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import math
-import os
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal, Protocol
 
 import numpy as np
 
 from study import CLASSES
-from study.core import cache
-from study.core.errors import ConfigError, DataError, StudyError
+from study.core.errors import ConfigError, StudyError
 from study.core.progress import Progress
 from study.experiments import paper, verdicts
-from study.experiments.presets import preset
+from study.experiments.videos import (  # noqa: F401  (re-exported: the chapter's videos)
+    REAL_CLIPS_DEFAULT,
+    REAL_CLIPS_ENV,
+    TENNIS_BALL,
+    Video,
+    book_set,
+    read_manifest,
+    real_clips,
+    real_clips_dir,
+    render_set,
+    throw,
+)
 from study.experiments.reported import Number, Reported, Verdict, named, number
 from study.experiments.text import Table, pct, pct_ci
 from study.learn.config import Inputs, TrainConfig
 from study.learn.metrics import Interval, wilson
 from study.see import render, track, video
-from study.simulate import measure, synth
+from study.simulate import measure
 
 if TYPE_CHECKING:  # the runner imports this module (its rendered throws): a type here, not an import cycle
     from study.experiments.runner import Recommendation, Runner
 
 # ---------------------------------------------------------------------------------------------
-# Videos: rendered with a known answer, or read from a folder with a manifest
-
-LABEL_ALIASES = {"light": "light", "bouncy": "light", "ball": "light", "heavy": "heavy", "sliding": "heavy", "cube": "heavy"}
-"""Manifest labels understood, mapped to the study's classes."""
-
-REAL_CLIPS_ENV = "STUDY_REAL_VIDEO"
-"""Environment variable that points :func:`real_clips_dir` at a folder of real clips."""
-REAL_CLIPS_DEFAULT = Path("..") / "shared" / "data" / "real-video"
-"""Where real clips recorded by others (tennis balls only) lie beside the project, relative to the
-working folder (the project root when the book runs); read there, never copied into the project."""
-
-TENNIS_BALL = 0.067
-"""Diameter of a tennis ball, metres (ITF: 6.54-6.86 cm)."""
+# Videos: rendered with a known answer, or read from a folder with a manifest (study.experiments.videos)
 
 
 class Model(Protocol):
@@ -79,149 +74,6 @@ class Model(Protocol):
     n_frames: int
 
     def predict_proba(self, x: np.ndarray) -> np.ndarray: ...
-
-
-@dataclass
-class Video:
-    """One labelled video and how to read it."""
-
-    path: Path
-    """The video file."""
-    label: str
-    """'light' or 'heavy'."""
-    color: str = "tennis"
-    """Tracker HSV preset."""
-    object_size: float = TENNIS_BALL
-    """Equivalent-disc diameter of the object's image, metres (sets the pixel scale)."""
-    rest_height: float = TENNIS_BALL / 2
-    """Height of the object's centre when it rests on the ground, metres."""
-    truth: Path | None = None
-    """Ground-truth CSV of a rendered video (``study.see.render``), if any."""
-    info: dict[str, Any] = field(default_factory=dict)
-    """Other manifest columns."""
-
-
-def real_clips_dir(path: str | Path | None = None) -> Path:
-    """The folder of real clips: ``path`` if given, else ``$STUDY_REAL_VIDEO``, else :data:`REAL_CLIPS_DEFAULT`.
-
-    The folder may not exist (the clips are optional); :func:`read_manifest` says so if it is read.
-    """
-    if path:
-        return Path(path)
-    return Path(os.environ.get(REAL_CLIPS_ENV) or REAL_CLIPS_DEFAULT)
-
-
-def read_manifest(video_dir: str | Path, color: str = "tennis", object_size: float = TENNIS_BALL) -> list[Video]:
-    """The videos listed in ``video_dir/MANIFEST.csv`` (columns ``file``, ``label``), in file order.
-
-    Raises :class:`DataError` for a missing folder, manifest or video, :class:`ConfigError` for an
-    unknown label (allowed: see :data:`LABEL_ALIASES`).
-    """
-    d = Path(video_dir)
-    m = d / "MANIFEST.csv"
-    if not d.is_dir():
-        raise DataError(f"video_dir {d}: no such folder; point it at a folder of videos with a MANIFEST.csv")
-    if not m.is_file():
-        raise DataError(f"video_dir {d}: no MANIFEST.csv; write one with the columns file,label")
-    rows = list(csv.DictReader(m.open(newline="")))
-    if not rows or not {"file", "label"} <= set(rows[0]):
-        raise DataError(f"manifest {m}: needs a header with the columns file and label, and one row per video")
-    out = []
-    for r in rows:
-        lab = LABEL_ALIASES.get(r["label"].strip().lower())
-        if lab is None:
-            raise ConfigError(f"manifest {m}: label {r['label']!r} of {r['file']} is unknown; use one of {', '.join(LABEL_ALIASES)}")
-        p = d / r["file"]
-        if not p.is_file():
-            raise DataError(f"manifest {m}: {r['file']} is listed but not in {d}")
-        info = {k: v for k, v in r.items() if k not in ("file", "label")}
-        out.append(Video(p, lab, color=color, object_size=object_size, rest_height=object_size / 2, info=info))
-    return sorted(out, key=lambda v: v.path.name)
-
-
-def real_clips(video_dir: str | Path = "", color: str = "tennis", object_size: float = TENNIS_BALL,
-               limit: int | None = None) -> list[Video]:
-    """The real clips the chapter classifies: those of ``video_dir``'s manifest (:func:`read_manifest`), or, with
-    no ``video_dir``, of :func:`real_clips_dir`'s folder if it holds a manifest (none there: no real clips); the
-    first ``limit`` of them (None: all)."""
-    folder = real_clips_dir(video_dir)
-    if not video_dir and not (folder / "MANIFEST.csv").is_file():
-        return []
-    return read_manifest(folder, color=color, object_size=object_size)[:limit]
-
-
-def launch_across_view(qpos: np.ndarray, qvel: np.ndarray, start_x: float = 1.2) -> tuple[np.ndarray, np.ndarray]:
-    """A launch turned to cross the side camera's view: horizontal speed kept, direction +x or -x, start at -+start_x."""
-    qpos, qvel = qpos.copy(), qvel.copy()
-    speed = math.hypot(qvel[0], qvel[1])
-    sign = 1.0 if qvel[0] >= 0 else -1.0
-    qvel[0], qvel[1] = sign * speed, 0.0
-    qpos[0], qpos[1] = -sign * start_x, 0.0
-    return qpos, qvel
-
-
-def throw(cfg, params: dict[str, np.ndarray], i: int, max_speed: float = 2.0):
-    """Throw ``i`` of a split's ``params`` as :func:`render_set` films it: its model (``render.synth_model``)
-    and its launch (qpos, qvel) turned across the camera's view, horizontal speed capped at ``max_speed`` m/s."""
-    model, qpos, qvel = render.synth_model(cfg, params, i)
-    qvel = qvel.copy()
-    h = math.hypot(qvel[0], qvel[1])
-    if h > max_speed:
-        qvel[:2] *= max_speed / h
-    qpos, qvel = launch_across_view(qpos, qvel)
-    return model, qpos, qvel
-
-
-def render_set(
-    cfg,
-    n_per_class: int,
-    seed: int,
-    out_dir: str | Path,
-    rcfg: render.RenderConfig,
-    max_speed: float = 2.0,
-    progress: bool = True,
-) -> list[Video]:
-    """Render ``n_per_class`` throws of each class, drawn from ``cfg``'s priors (a ``synth.SynthConfig``).
-
-    Objects and launches come from ``synth.sample_split(cfg, seed, "test")`` (so use a ``seed``
-    other than the training data's); each launch is turned across the camera's view with its
-    horizontal speed capped at ``max_speed`` m/s so the object stays in the picture longer. Videos
-    are cached under ``out_dir/<key>/`` by a hash of everything that determines them.
-    """
-    cfg = cfg.replace(n_test=n_per_class)
-    key = cache.key({"synth": cfg.to_dict(), "seed": seed, "render": rcfg.__dict__ | {"progress": None},
-                     "max_speed": max_speed,
-                     "code": cache.source_hash("see.render", "simulate.scene", "simulate.synth", "experiments.realworld")})
-    folder = Path(out_dir) / f"rendered-{key}"
-    params = synth.sample_split(cfg, seed, "test")
-    size = 2 * math.sqrt(4 * cfg.shape.size[0] * cfg.shape.size[1] / math.pi) if cfg.shape.kind == "box" else 2 * cfg.shape.size[0]
-    videos = []
-    for i in range(len(params["label"])):
-        label = CLASSES[int(params["label"][i])]
-        name = f"{label}_{i:03d}.mp4"
-        videos.append(Video(folder / name, label, color="orange", object_size=size, rest_height=cfg.shape.rest_height,
-                            truth=(folder / name).with_suffix(".csv"), info={"mass": float(params["mass"][i]),
-                            "restitution": float(params["restitution"][i])}))
-    todo = [i for i, v in enumerate(videos) if not (v.path.is_file() and v.truth.is_file())]
-    with Progress("render videos", total=len(todo), show=progress, unit="video") as bar:
-        for i in todo:
-            render.render(*throw(cfg, params, i, max_speed), videos[i].path, rcfg)
-            bar.update()
-    (folder / "MANIFEST.csv").write_text("file,label\n" + "".join(f"{v.path.name},{v.label}\n" for v in videos))
-    return videos
-
-
-def book_set(preset_name: str, fps: float, duration: float, render_seed: int = 1000, data_dir: str | Path = "data",
-             progress: bool = False) -> tuple[list[Video], render.RenderConfig]:
-    """The rendered throws the book uses (the real-world chapter's, which the cue chapter measures the
-    tracker on): the preset's ``videos_per_class`` of each class at 320 x 240, ``fps``, ``duration``
-    seconds, with motion blur, sensor noise and JPEG loss; rendered once, then read from the cache."""
-    p = preset(preset_name)
-    rcfg = render.RenderConfig(width=320, height=240, fps=fps, duration=duration, blur_subframes=2, noise_std=2.0,
-                               jpeg_quality=85, shadows=p.render_shadows, seed=render_seed)
-    cfg = synth.SynthConfig.preset(preset_name)
-    videos = render_set(cfg, p.videos_per_class, render_seed, Path(data_dir) / "realworld", rcfg, progress=progress)
-    return videos, rcfg
 
 
 # ---------------------------------------------------------------------------------------------

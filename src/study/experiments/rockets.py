@@ -31,7 +31,7 @@ def rocket_key(dataset: Dataset, dims: Dims, n_frames: int, seed: int, tests: di
         "format": FORMAT, "data": dataset.key, "dims": dims, "n_frames": n_frames, "seed": seed,
         "train": None if train_x is None else cache.array_checksum({"x": np.asarray(train_x)}),
         "tests": {name: cache.array_checksum({"x": np.asarray(x)}) for name, x in sorted(tests.items())},
-        "code": cache.source_hash("learn.rocket", "learn.config"), "sktime": sktime.__version__,
+        "code": cache.code_hash("minirocket"), "sktime": sktime.__version__,
         "sklearn": sklearn.__version__,
     })
 

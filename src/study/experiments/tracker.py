@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from study.experiments.realworld import Video
+from study.experiments.videos import Video
 from study.see import render, track
 from study.simulate import observe
 
