@@ -424,3 +424,29 @@ def test_a_network_trained_at_every_frame_answers_at_every_frame_and_streams(ds)
     np.testing.assert_allclose(streamed, frames[0], atol=1e-5)  # what a car would run, frame by frame
     with pytest.raises(ConfigError, match="loss_at"):
         train.fit(ds, dataclasses.replace(cfg, loss_at="first"), progress=False)
+
+
+def test_a_failure_verdict_fits_its_evidence():
+    """Judged on the validation loss as well as the accuracy; a validation part too small to tell says so."""
+    from study.learn.metrics import PLATEAU_LOSS, too_few_to_tell, training_state
+
+    assert too_few_to_tell(3) and not too_few_to_tell(4), "3 right of 3 is within a coin's reach; 4 of 4 is not"
+    assert training_state(1.0, 0.001, 3) == "too few to tell", "3 of 3 right at a loss of 0.001: not a failure"
+    assert training_state(1.0, 0.69, 3) == "failed", "a coin's loss fails whatever the split"
+    assert training_state(0.52, 0.40, 400) == "failed", "at chance on enough throws: failed, however low the loss"
+    assert training_state(0.80, 0.40, 400) == "trained"
+    assert training_state(0.80, float("nan"), 400) == "failed" and training_state(0.80, PLATEAU_LOSS, 400) == "failed"
+    from study.learn.model import Classifier
+
+    net = Classifier(1)
+    hist = [{"epoch": 0, "train_loss": 0.1, "val_loss": 0.001, "val_accuracy": 1.0}]
+    tm = train.TrainedModel(net, train.TrainConfig(), 30.0, history=hist, n_val=3)
+    assert not tm.failed and tm.training_state == "too few to tell"
+    msg = tm.failure()
+    assert "too small to tell" in msg and "never left" not in msg and "3 of 3" in msg
+    plateau = train.TrainedModel(net, train.TrainConfig(), 30.0, n_val=3,
+                                 history=[{"epoch": 0, "train_loss": 0.7, "val_loss": 0.69, "val_accuracy": 0.67}])
+    assert plateau.failed and "never left the initial plateau" in plateau.failure()
+    chance = train.TrainedModel(net, train.TrainConfig(), 30.0, n_val=400,
+                                history=[{"epoch": 0, "train_loss": 0.5, "val_loss": 0.5, "val_accuracy": 0.51}])
+    assert chance.failed and "cannot be told from guessing" in chance.failure()

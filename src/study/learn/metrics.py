@@ -9,8 +9,8 @@
 - :func:`hierarchical_bootstrap`: the mean accuracy over several data sets (each with its own seeds and
   test set), with an interval that holds the data sets' spread too; :func:`between_share`: how much of a
   run's variance lies between data sets.
-- :func:`at_chance`, :func:`failed_to_train`: a run indistinguishable from guessing, or still on its
-  initial plateau.
+- :func:`at_chance`, :func:`training_state`, :func:`failed_to_train`: a run indistinguishable from guessing, or
+  still on its initial plateau, judged on its validation loss and accuracy (or too few validation items to tell).
 
 Every interval is an :class:`Interval`: the estimate, its bounds and how it was computed.
 """
@@ -152,10 +152,35 @@ PLATEAU_LOSS = 0.9 * math.log(2)
 ln 2. Trained runs of the study reach 0.4-0.5; a stalled one stays near 0.69 at 55 % accuracy."""
 
 
+TRAINING_STATES = ("trained", "failed", "too few to tell")
+"""What a run's validation part says of it (:func:`training_state`)."""
+
+
+def too_few_to_tell(n: int) -> bool:
+    """Whether ``n`` validation items are too few for any accuracy to be told from guessing: even all of them right,
+    the Wilson interval reaches 1/2 (3 or fewer)."""
+    return n < 1 or wilson(n, n).lo <= 0.5
+
+
+def training_state(val_accuracy: float, val_loss: float, n_val: int) -> str:
+    """What the validation part says of a run, judged on its loss and its accuracy:
+
+    - ``"failed"``: its loss is not finite (it diverged) or never left the initial plateau (:data:`PLATEAU_LOSS`),
+      or its accuracy cannot be told from guessing (:func:`at_chance`) on a validation part large enough to tell;
+    - ``"too few to tell"``: its loss left the plateau, but the validation part is too small for its accuracy to
+      say anything (:func:`too_few_to_tell`: 3 right of 3 is within a coin's reach);
+    - ``"trained"`` otherwise.
+    """
+    if not (math.isfinite(val_loss) and math.isfinite(val_accuracy)) or not val_loss < PLATEAU_LOSS:
+        return "failed"
+    if too_few_to_tell(n_val):
+        return "too few to tell"
+    return "failed" if at_chance(val_accuracy, n_val) else "trained"
+
+
 def failed_to_train(val_accuracy: float, val_loss: float, n_val: int) -> bool:
-    """A run failed to train if its validation accuracy is :func:`at_chance`, or its validation loss never
-    left the initial plateau (:data:`PLATEAU_LOSS`): it ended where it started."""
-    return at_chance(val_accuracy, n_val) or not val_loss < PLATEAU_LOSS
+    """A run failed to train (:func:`training_state` says ``"failed"``): it ended where it started."""
+    return training_state(val_accuracy, val_loss, n_val) == "failed"
 
 
 def t_interval(values: Sequence[float], level: float = LEVEL) -> Interval:

@@ -33,7 +33,7 @@ rows (4H for the LSTMs, 3H for the GRU). Tensors inside are time-major, ``(K, T,
 
 from __future__ import annotations
 
-import copy
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -43,8 +43,11 @@ import torch
 import torch.nn.functional as F
 
 from study.learn import gru, model, native, peephole
-from study.learn.config import TrainConfig
+from study.learn.config import DIMS, TrainConfig, select_inputs
+from study.learn.inputs import deterministic, epoch_inputs, normalisation, split_train_val
 from study.learn.model import Classifier
+from study.learn.trained import THREADS, TrainedModel, num_threads
+from study.simulate.data import Dataset
 
 STACKABLE = ("peephole", "no-peephole", "gru")
 """Cells with a stacked form; ``'torch-lstm'`` (``nn.LSTM``) trains alone."""
@@ -453,31 +456,25 @@ class Member:
     done: bool = False
 
 
-def shape(dataset, cfg: TrainConfig) -> Shape:
+def shape(dataset: Dataset, cfg: TrainConfig) -> Shape:
     """The stack shape of training ``cfg`` on ``dataset`` (``study.simulate.data.Dataset``)."""
-    from study.learn.config import DIMS
-    from study.learn.train import split_train_val
-
     tr, va = split_train_val(len(dataset.train.y), cfg.val_fraction, cfg.seed)
     return Shape(cfg.n_frames(dataset.fps), len(DIMS[cfg.dims]), cfg.inputs, float(dataset.fps), cfg.cell, cfg.hidden,
                  cfg.layers, cfg.batch_size, cfg.truncation, cfg.loss_at, len(tr), len(va))
 
 
-def _member(dataset, cfg: TrainConfig, device: torch.device) -> Member:
+def _member(dataset: Dataset, cfg: TrainConfig, device: torch.device) -> Member:
     """A member ready to train: its data split and observed as a lone run's, its network initialised as a lone
     run's (``study.learn.train.fit``), and its generator where that run's random numbers go on from."""
-    from study.learn import train
-    from study.learn.config import select_inputs
-
     cfg.check()
     T = cfg.n_frames(dataset.fps)
     x = select_inputs(dataset.train.x, cfg.dims, T, what="training split")
     y = np.asarray(dataset.train.y, dtype=np.int64)
-    tr, va = train.split_train_val(len(y), cfg.val_fraction, cfg.seed)
-    view, x_val = train._inputs(dataset.train.x[:, :T], tr, va, cfg, dataset.fps)
+    tr, va = split_train_val(len(y), cfg.val_fraction, cfg.seed)
+    view, x_val = epoch_inputs(dataset.train.x[:, :T], tr, va, cfg, dataset.fps)
     feats = model.Features(x.shape[2], cfg.inputs, dataset.fps)
-    mean, std = train.normalisation(view(0), feats)
-    with train.deterministic(cfg.seed):
+    mean, std = normalisation(view(0), feats)
+    with deterministic(cfg.seed):
         net = Classifier(x.shape[2], cfg.hidden, cfg.layers, cfg.dropout, cfg.cell, forget_bias=cfg.forget_bias,
                          chrono_frames=T if cfg.forget_init == "chrono" else None, inputs=cfg.inputs, fps=dataset.fps)
         net.set_normalisation(torch.from_numpy(mean).float(), torch.from_numpy(std).float())
@@ -528,20 +525,14 @@ def _validate(members: Sequence[Member], layout: Layout, sh: Shape, mean: torch.
     out = []
     for i in range(0, n, batch):
         x = torch.stack([m.x_va[i : i + batch] for m in members])
-        out.append(logits(views, dataclasses_replace(sh, truncation=sh.frames), x, mean, std))
+        out.append(logits(views, dataclasses.replace(sh, truncation=sh.frames), x, mean, std))
     lg = torch.cat(out, dim=1)  # (K, n_val, 2)
     return [(F.cross_entropy(l, m.y_va).item(), (l.argmax(1) == m.y_va).double().mean().item())
             for l, m in zip(lg.unbind(0), members)]
 
 
-def dataclasses_replace(sh: Shape, **changes) -> Shape:
-    import dataclasses
-
-    return dataclasses.replace(sh, **changes)
-
-
-def train(runs: Sequence[tuple[object, TrainConfig]], device: str | torch.device = "cpu",
-          on_epoch: Callable[[int, TrainConfig], None] | None = None) -> list:
+def train(runs: Sequence[tuple[Dataset, TrainConfig]], device: str | torch.device = "cpu",
+          on_epoch: Callable[[int, TrainConfig], None] | None = None) -> list[TrainedModel]:
     """Train every run of ``runs`` ((dataset, config) pairs of one :class:`Shape`) as one stack; returns their
     ``study.learn.train.TrainedModel``, in order, each what training it alone gives. ``on_epoch(i, cfg)`` is
     called after each epoch of member i (progress)."""
@@ -567,10 +558,9 @@ def train(runs: Sequence[tuple[object, TrainConfig]], device: str | torch.device
         torch.utils.deterministic.fill_uninitialized_memory = fill
 
 
-def _train(runs, sh: Shape, dev: torch.device, on_epoch) -> list:
-    from study.learn import train as lone
-
-    with lone.num_threads(lone.THREADS):
+def _train(runs: Sequence[tuple[Dataset, TrainConfig]], sh: Shape, dev: torch.device,
+           on_epoch: Callable[[int, TrainConfig], None] | None) -> list[TrainedModel]:
+    with num_threads(THREADS):
         members = [_member(ds, cfg, dev) for ds, cfg in runs]
         layout = Layout.of(members[0].net)
         stats = {id(m): (m.net.features.mean, m.net.features.std) for m in members}
@@ -647,10 +637,8 @@ def _end_epoch(m: Member, epoch: int, val_loss: float, val_acc: float) -> None:
         m.done = True
 
 
-def _finish(m: Member, layout: Layout, dataset) -> object:
+def _finish(m: Member, layout: Layout, dataset: Dataset) -> TrainedModel:
     """The member's ``TrainedModel``: its best epoch's weights in its classifier."""
-    from study.learn.train import TrainedModel
-
     if m.diverged is not None:
         m.history.append({"epoch": m.diverged, "train_loss": math.nan, "val_loss": math.nan, "val_accuracy": math.nan})
     layout.load(m.net, m.best_flat)
