@@ -5,6 +5,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 PRESET ?= paper
 SCHEDULER ?=
+DEVICE ?= cpu
 export MUJOCO_GL ?= egl
 export PYTHONHASHSEED := 0
 
@@ -20,9 +21,10 @@ $(BIN)/.installed: requirements.txt pyproject.toml
 install: $(BIN)/.installed
 
 ## Execute every chapter with papermill (PRESET=paper by default) and build the HTML book in _build/html;
-## SCHEDULER=local (or a Dask scheduler's address) trains the chapters' runs on a Dask cluster.
+## SCHEDULER=local (or a Dask scheduler's address) trains the chapters' runs on a Dask cluster;
+## DEVICE=cuda (or auto) trains them on a GPU.
 book: $(BIN)/.installed
-	$(BIN)/study book --preset $(PRESET) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+	$(BIN)/study book --preset $(PRESET) $(if $(SCHEDULER),--scheduler $(SCHEDULER)) --device $(DEVICE)
 
 ## Unit tests and smoke runs of the real entry points (smoke presets).
 test: $(BIN)/.installed

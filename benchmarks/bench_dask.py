@@ -1,7 +1,7 @@
 """Throughput of a batch of training runs on the local process pool against a Dask LocalCluster, in one run.
 
 The same batch of smoke-preset runs (Table 1's smoke configuration over many seeds, Z and X, Y, Z) is trained
-twice into fresh data folders: by ``study.experiments.runs.run_all`` on a pool of spawned processes (the
+twice into fresh data folders: by ``study.experiments.schedule.run_all`` on a pool of spawned processes (the
 default), and on a ``LocalCluster`` with one single-threaded worker per core (``study book --scheduler local``).
 Prints runs per minute for each, the cluster's throughput over the pool's (1.0 = as fast), and whether the
 two gave the same records (they must). The cluster's start-up is timed apart.
@@ -28,20 +28,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=0, help="processes / Dask workers (0: one per CPU)")
     ap.add_argument("--epochs", type=int, default=10, help="epochs per run (the smoke preset's 3 are mostly start-up)")
     a = ap.parse_args(argv)
-    workers = a.workers or runs.default_workers()
+    workers = a.workers or schedule.default_workers()
     p = preset("smoke")
     with tempfile.TemporaryDirectory() as tmp:
         ds = synth.dataset("smoke", seed=0, data_dir=Path(tmp) / "data", progress=False)
         base = dataclasses.replace(p.base_config(), max_epochs=a.epochs, min_epochs=a.epochs)
         cfgs = paper.seed_configs(base, tuple(range(a.runs // 2)))
         t0 = time.perf_counter()
-        local = runs.run_all(ds, cfgs, Path(tmp) / "pool", True, workers=workers)
+        local = schedule.run_all(ds, cfgs, Path(tmp) / "pool", True, workers=workers)
         t_pool = time.perf_counter() - t0
         t0 = time.perf_counter()
-        runs.client("local", workers)
+        schedule.client("local", workers)
         t_start = time.perf_counter() - t0
         t0 = time.perf_counter()
-        dask = runs.run_all(ds, cfgs, Path(tmp) / "dask", True, workers=workers, scheduler="local")
+        dask = schedule.run_all(ds, cfgs, Path(tmp) / "dask", True, workers=workers, scheduler="local")
         t_dask = time.perf_counter() - t0
         same = all({k: v for k, v in x.items() if k != "train_seconds"} == {k: v for k, v in y.items() if k != "train_seconds"}
                    for x, y in zip(local, dask))

@@ -21,7 +21,7 @@ from study.experiments import rockets, runs
 from study.learn import train
 from study.learn.config import DIMS, TrainConfig
 from study.learn.model import Classifier
-from study.learn.metrics import failed_to_train, metrics
+from study.learn.metrics import failed_to_train, metrics, training_state
 from study.simulate.data import Dataset
 
 
@@ -34,7 +34,8 @@ def record(dataset: Dataset, cfg: TrainConfig, test: bool, accuracy: float, val_
     rec = {
         "key": runs.run_key(dataset, cfg, test), "format": runs.RUN_FORMAT, "data_key": dataset.key,
         "config": dataclasses.asdict(cfg), "val_accuracy": va, "val_loss": val_loss, "n_val": n_val,
-        "failed": failed_to_train(va, val_loss, n_val), "diverged_epoch": None, "best_epoch": 1, "epochs_run": 3,
+        "training": training_state(va, val_loss, n_val), "failed": failed_to_train(va, val_loss, n_val),
+        "diverged_epoch": None, "best_epoch": 1, "epochs_run": 3,
         "history": [{"epoch": e, "val_loss": val_loss, "val_accuracy": va} for e in range(3)],
         "train_seconds": 1.0, "test": None,
     }
@@ -51,15 +52,18 @@ def record(dataset: Dataset, cfg: TrainConfig, test: bool, accuracy: float, val_
 
 def cache_records(runner, cfgs: Iterable[TrainConfig], score: Callable[[TrainConfig], float] = lambda c: 0.7,
                   test: bool = True, dataset: Dataset | None = None,
-                  val_score: Callable[[TrainConfig], float] | None = None) -> None:
+                  val_score: Callable[[TrainConfig], float] | None = None,
+                  val_loss: Callable[[TrainConfig], float] | None = None) -> None:
     """Write a record of each of ``cfgs`` (on ``dataset``, default the runner's), scored on the test split if
     ``test``, right on ``score(cfg)`` of the test throws and ``val_score(cfg)`` (default ``score``) of the
-    validation throws, into the runner's cache (both the test-scored and the validation-only record, so every
-    experiment reading either finds it)."""
+    validation throws at a validation loss of ``val_loss(cfg)`` (default 0.45: it trained; 0.69, a coin's, fails),
+    into the runner's cache (both the test-scored and the validation-only record, so every experiment reading either
+    finds it)."""
     ds = dataset or runner.dataset
     for cfg in cfgs:
         for t in (True, False) if test else (False,):
-            rec = record(ds, cfg, t, score(cfg), None if val_score is None else val_score(cfg))
+            rec = record(ds, cfg, t, score(cfg), None if val_score is None else val_score(cfg),
+                         0.45 if val_loss is None else val_loss(cfg))
             write_text_atomic(runs.record_path(runner.data_dir, rec["key"]), json.dumps(rec) + "\n")
 
 

@@ -385,6 +385,14 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
     (tmp_path / "data").mkdir()
     monkeypatch.setenv("MPLBACKEND", "Agg")
     book.build(tmp_path, "smoke", force=False, only=None, html=True)
+    timings = json.loads((tmp_path / "_build" / "executed" / "timings.json").read_text())
+    assert len(timings["stages"]) >= 2, "a cold build plans its runs in stages: the grid, then what its winner needs"
+    assert all(s["runs"] > 0 and s["chapters"] for s in timings["stages"])
+    records = sorted((tmp_path / "data" / "runs").glob("*.json"))
+    again = book.execute(tmp_path, "smoke", only=["table1", "decision"])  # every run they ask for is trained
+    assert not json.loads((tmp_path / "_build" / "executed" / "timings.json").read_text())["stages"]
+    assert sorted((tmp_path / "data" / "runs").glob("*.json")) == records, "executing after the plan trains no run"
+    assert not again["table1"]["cached"] and "waited" not in again["table1"]
     index = tmp_path / "_build" / "html" / "book" / "intro.html"
     assert "The motion-pattern study" in index.read_text()
     figures = 0

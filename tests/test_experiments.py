@@ -11,7 +11,7 @@ import pytest
 from study import experiments
 from study.core import presets
 from study.core.errors import ConfigError
-from study.experiments import paper, runs, stats, text
+from study.experiments import cluster, paper, runs, schedule, stats, text
 from study.experiments.runner import Runner
 from study.experiments.runtable import Run, Runs
 from study.learn import train
@@ -78,7 +78,7 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
 
 def test_the_plan_counts_distinct_models_and_sums_their_training_time(tmp_path, ds):
     cfg = TINY.base_config()
-    plan = runs.Plan(tmp_path / "plan.jsonl")
+    plan = schedule.Plan(tmp_path / "plan.jsonl")
     for c in paper.seed_configs(cfg, TINY.seeds):
         plan.add(ds, c, tmp_path, test=True)
     assert plan.n_models == 4
@@ -89,7 +89,7 @@ def test_the_plan_counts_distinct_models_and_sums_their_training_time(tmp_path, 
     key = runs.run_key(ds, dataclasses.replace(cfg, seed=9), True)
     runs.record_path(tmp_path, key).parent.mkdir(parents=True)
     runs.record_path(tmp_path, key).write_text(json.dumps({"train_seconds": 2.5}))
-    assert runs.plan_totals([tmp_path / "plan.jsonl", tmp_path / "absent.jsonl"]) == {"models": 5.0, "train_seconds": 2.5}
+    assert cluster.plan_totals([tmp_path / "plan.jsonl", tmp_path / "absent.jsonl"]) == {"models": 5.0, "train_seconds": 2.5}
 
 
 def _run(cfg: train.TrainConfig, val_accuracy: float = 0.7, accuracy: float | None = None, **kw) -> Run:
@@ -249,15 +249,15 @@ def test_a_dask_cluster_trains_the_same_records_as_the_local_pool(tmp_path, smok
         a, b = (json.loads((tmp_path / w / "runs" / name).read_text()) for w in ("pool", "dask"))
         a.pop("train_seconds"), b.pop("train_seconds")
         assert a == b
-    c = runs.client("local", 2)
+    c = schedule.client("local", 2)
     assert c.scheduler.address.startswith("tcp://127.0.0.1:"), "a LocalCluster listens on the loopback only"
     assert all(w.startswith("tcp://127.0.0.1:") for w in c.scheduler_info()["workers"])
 
 
 def test_a_worker_that_computes_another_key_refuses(tmp_path, ds):
     cfg = TINY.base_config()
-    with pytest.raises(runs.WorkerError, match="computes run key .* where the submitter computed wrong"):
-        runs.train_task(ds, cfg, str(tmp_path), True, "wrong")
+    with pytest.raises(schedule.WorkerError, match="computes run key .* where the submitter computed wrong"):
+        schedule.stack_task([(ds, cfg, True, "wrong")], str(tmp_path))
     assert not (tmp_path / "runs").exists(), "it writes nothing"
 
 

@@ -112,6 +112,12 @@ def _val(c) -> float:
     return 0.7 + 0.1 * (c.seed == 0)
 
 
+def _loss(c) -> float:
+    """Seed 1 of an observed column never leaves the plateau (a coin's loss): those runs failed to train. (Not the
+    exact columns' runs: some of them are grid runs, whose losses choose the grid's winner.)"""
+    return 0.69 if c.seed == 1 and c.observe != "exact" else 0.45
+
+
 @pytest.fixture(scope="module")
 def m(tmp_path_factory) -> motion.Motion:
     runner = Runner.open("smoke", data_dir=tmp_path_factory.mktemp("data"))
@@ -123,7 +129,7 @@ def m(tmp_path_factory) -> motion.Motion:
     cols = motion.columns(CAL)
     on = {True: runner, False: runner.air_off()}
     for r, batch, _ in motion.plan(on, cfgs, cols, p.grid_seeds):
-        cache_records(r, batch, val_score=_val)
+        cache_records(r, batch, val_score=_val, val_loss=_loss)
         cache_models(r, batch)
     T = cfgs["peephole_positions"].n_frames(runner.fps)
     for c in cols:
@@ -187,7 +193,9 @@ def test_each_columns_best_learner_is_the_highest_mean_and_its_lead_is_paired(m)
 def test_the_tables_and_sentences(m):
     assert len(m.motion_table.rows) == len(motion.LEARNERS) + 1
     exact_trained = m.motion_table.rows[motion.LEARNERS.index("peephole_exact_trained")]
-    assert exact_trained["air_on.exact"] == "—" and exact_trained["air_on.near"].endswith("failed")
+    positions = m.motion_table.rows[motion.LEARNERS.index("peephole_positions")]
+    assert exact_trained["air_on.exact"] == "—" and not exact_trained["air_on.near"].endswith("failed")
+    assert positions["air_on.near"].endswith("failed"), "an observed column's seed 1 failed to train: said there"
     assert m.motion_table.rows[-1]["air_on.exact"] == "**100.0 %**"
     assert [r["column"] for r in m.best_table.rows] == [c.heading for c in m.columns]
     assert "ahead of the" in m.best_table.rows[3]["lead"], "the perfect MiniRocket leads its column"

@@ -135,11 +135,19 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
         "Every worker needs the study package installed and the data folder on a shared path; a scheduler must "
         "never listen on an open network (it runs whatever code reaches it). Not part of any cache key",
     )
+    p.add_argument(
+        "--device",
+        default="cpu",
+        help="where the runs train: 'cpu' (default), 'cuda' (a GPU: runs of one shape train as stacks of many, each "
+        "as it would alone; their keys name the GPU, whose rounding may depend on the stack's size), or 'auto' "
+        "(a GPU where there is one, said on the terminal)",
+    )
 
     def run(a: argparse.Namespace) -> int:
         from study import book
 
-        book.build(root=a.root, preset=a.preset, force=a.force, only=a.only, html=not a.no_build, scheduler=a.scheduler)
+        book.build(root=a.root, preset=a.preset, force=a.force, only=a.only, html=not a.no_build, scheduler=a.scheduler,
+                   device=a.device)
         return 0
 
     p.set_defaults(run=run)

@@ -40,7 +40,7 @@ from study.core.errors import ChapterError, ConfigError, check_writable
 from study.core.progress import ENV as PROGRESS_ENV
 from study.core.progress import Follower
 from study.experiments import cluster
-from study.experiments.cluster import PLAN_ENV
+from study.experiments.cluster import DEVICE_ENV, PLAN_ENV
 
 RUNTIME = ("scheduler",)
 """Parameters that say where a chapter's work runs, not what it computes: injected into the chapters that
@@ -88,7 +88,7 @@ class Chapter:
 
     @property
     def plan_part(self) -> Path:
-        """The training runs this chapter asked for in its last run (``study.experiments.runs.Plan``)."""
+        """The training runs this chapter asked for in its last run (``study.experiments.schedule.Plan``)."""
         return self.root / EXECUTED / "plans" / f"{self.entry}.jsonl"
 
     @property
@@ -321,7 +321,13 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
                 # unencrypted; errors still show.
                 extra_arguments=["--IPKernelApp.log_level=ERROR"],
             )
-    except (PapermillExecutionError, DeadKernelError) as e:
+    except PapermillExecutionError as e:
+        if e.ename == "Pending":  # it asked for runs not trained yet: the build trains them, then runs it again
+            running.unlink(missing_ok=True)
+            raise _Pending(ch.stem) from None
+        _keep_failed(ch, running)
+        raise ChapterError(_failure_message(ch, e, nb, root)) from None
+    except DeadKernelError as e:
         _keep_failed(ch, running)
         raise ChapterError(_failure_message(ch, e, nb, root)) from None
     except BaseException:
@@ -342,6 +348,10 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
     ch.executed.parent.mkdir(parents=True, exist_ok=True)
     os.replace(running, ch.executed)  # same filesystem: the complete copy appears in one step
     ch.failed.unlink(missing_ok=True)
+
+
+class _Pending(Exception):
+    """A chapter stopped at runs not trained yet (``study.experiments.schedule.Pending``)."""
 
 
 def _keep_failed(ch: Chapter, running: Path) -> None:
@@ -387,17 +397,24 @@ def _decide(ch: Chapter, current: str, force: bool, only: list[str] | None) -> t
 
 
 def execute(root: Path, preset: str, force: bool = False, only: list[str] | None = None,
-            scheduler: str = "") -> dict[str, dict[str, Any]]:
+            scheduler: str = "", device: str = "cpu", workers: int = 0) -> dict[str, dict[str, Any]]:
     """Execute (or reuse) every chapter of ``root``'s book; returns {stem: {"seconds", "cached", ...}}.
 
     ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, keeping the others'
-    current copies, but a chapter that has no executed copy at all is always executed. ``scheduler`` (a
-    Dask scheduler's address) is handed to every chapter with a ``scheduler`` parameter, outside its cache
-    key. Stops at the first failing chapter with :class:`ChapterError`. Also writes
-    ``_build/executed/timings.json`` (with the models the book's chapters train and their CPU time,
-    :func:`plan_totals`) and merges the chapters' numbers into ``_build/results.json``
-    (:mod:`study.book.results`): before the chapters that run last (:func:`_runs_last`, such as a summary that
-    reads them) and again at the end.
+    current copies, but a chapter that has no executed copy at all is always executed.
+
+    **One plan for the build.** The chapters to execute run in rounds. In each, a chapter that asks for runs not
+    trained yet writes them down and stops (``study.experiments.schedule.ask``); once every chapter has run or
+    stopped, the union of what they asked for is trained at once, in stacks, longest first, on every core
+    (``workers``, 0: one per CPU) or the Dask ``scheduler``, on ``device``, and the stopped chapters run again. A
+    round is a stage of the plan: the runs that depend on earlier results (Table 1's configuration is the grid's
+    winner) come in the stage after them. A chapter that completes has trained nothing itself. ``scheduler`` (a
+    Dask scheduler's address) is also handed to every chapter with a ``scheduler`` parameter, outside its cache
+    key; ``device`` is part of every chapter's key (the runs' keys name it). Stops at the first failing chapter with
+    :class:`ChapterError`. Writes ``_build/executed/timings.json`` (each chapter's last execution, each stage's
+    runs and seconds, the models the book's chapters train and their CPU time, :func:`plan_totals`) and merges the
+    chapters' numbers into ``_build/results.json`` (:mod:`study.book.results`): before the chapters that run last
+    (:func:`_runs_last`, such as a summary that reads them) and again at the end.
     """
     import nbformat
 
@@ -410,17 +427,17 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     injected = {"preset": preset}
     package = source_hash()
     timings: dict[str, dict[str, Any]] = {}
+    stages: list[dict[str, Any]] = []
     done: list[tuple[Chapter, dict[str, Any], dict[str, Any], float]] = []
     sources = {ch.stem: _read_notebook(ch.source) for ch in chs}
     last = [ch for ch in chs if _runs_last(sources[ch.stem])]  # they read what the others wrote
     order = [ch for ch in chs if ch not in last] + last
     try:
         with tempfile.TemporaryDirectory(prefix="study-book-") as tmp:
+            todo: list[tuple[int, Chapter, Path, dict[str, Any], dict[str, Any], dict[str, Any]]] = []
             for n, ch in enumerate(order, 1):
                 where = f"[{n}/{len(chs)}] {ch.stem}"
                 nb = sources[ch.stem]
-                if ch is (last[0] if last else None):  # the results of every other chapter, merged for it
-                    results.merge([c.results_part for c in chs], root / results.FILE, preset)
                 if not _is_notebook(nb):  # a plain page: placed, never executed
                     _copy_if_changed(ch.source, root / EXECUTED / f"{ch.entry}.md")
                     timings[ch.stem] = {"seconds": 0.0, "cached": True, "page": True}
@@ -435,6 +452,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                     "injected": canonical_json(injected),
                     "package": package,
                     "kernel": KERNEL,
+                    **({"device": device} if device != "cpu" else {}),
                 }
                 current = key({**base, "inputs": inputs_fingerprint(root, parameters)}, length=64)
                 action, stored = _decide(ch, current, force, only)
@@ -444,27 +462,92 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                     note = f"executed earlier in {seconds:.1f} s" if action == "cached" else "out of date; not in --only"
                     tqdm.write(f"{where}: {action} ({note})", file=sys.stderr)
                     continue
-                tqdm.write(f"{where}: executing", file=sys.stderr)
-                t0 = time.perf_counter()
-                try:
-                    _execute(ch, probe, nb, injected | runtime, root)
-                except ChapterError:
-                    timings[ch.stem] = {"seconds": round(time.perf_counter() - t0, 3), "cached": False, "failed": True}
-                    raise
-                seconds = time.perf_counter() - t0
-                done.append((ch, base, parameters, seconds))
-                timings[ch.stem] = {"seconds": round(seconds, 3), "cached": False}
-                tqdm.write(f"{where}: executed in {_duration(seconds)}", file=sys.stderr)
+                todo.append((n, ch, probe, nb, injected | runtime, {"base": base, "parameters": parameters}))
+            _run_planned(root, preset, chs, last, todo, timings, stages, done, Path(tmp), scheduler, device, workers)
     finally:
         # Keys last, once every chapter of this run has written what it writes: a chapter whose
         # input folder a later chapter adds to is not re-executed next time for that reason alone.
         for ch, base, parameters, seconds in done:
             _write_key(ch, base, parameters, root, seconds)
         if timings:
-            record = {"preset": preset, "chapters": timings, "runs": plan_totals(root)}
+            record = {"preset": preset, "device": device, "chapters": timings, "stages": stages,
+                      "runs": plan_totals(root)}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
             results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
+
+
+def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter], todo: list, timings: dict,
+                 stages: list, done: list, tmp: Path, scheduler: str, device: str, workers: int) -> None:
+    """Execute the chapters of ``todo`` in rounds (see :func:`execute`), training each round's runs at once; the
+    chapters that run last wait until every other chapter is done."""
+    from study.experiments import schedule  # torch: only a build that executes a chapter loads it
+
+    rest = [t for t in todo if t[1] not in last]
+    final = [t for t in todo if t[1] in last]
+    asked_before: set[str] = set()
+    for group in (rest, final):
+        if group is final and final:  # the results of every other chapter, merged for them
+            results.merge([c.results_part for c in chs], root / results.FILE, preset)
+        waiting = list(group)
+        while waiting:
+            pending_file = tmp / f"pending-{len(stages)}.jsonl"
+            stopped = []
+            for n, ch, probe, nb, params, info in waiting:
+                where = f"[{n}/{len(chs)}] {ch.stem}"
+                tqdm.write(f"{where}: executing" + (f" (stage {len(stages) + 1})" if stages else ""), file=sys.stderr)
+                t0 = time.perf_counter()
+                try:
+                    with _environment({schedule.PENDING_ENV: str(pending_file), DEVICE_ENV: device}):
+                        _execute(ch, probe, nb, params, root)
+                except _Pending:
+                    seconds = time.perf_counter() - t0
+                    entry = timings.setdefault(ch.stem, {"seconds": 0.0, "cached": False})
+                    entry["waited"] = round(entry.get("waited", 0.0) + seconds, 3)  # its executions that stopped
+                    tqdm.write(f"{where}: stopped after {_duration(seconds)}, at runs not trained yet", file=sys.stderr)
+                    stopped.append((n, ch, probe, nb, params, info))
+                    continue
+                except ChapterError:
+                    timings[ch.stem] = {**timings.get(ch.stem, {}), "seconds": round(time.perf_counter() - t0, 3),
+                                        "cached": False, "failed": True}
+                    raise
+                seconds = time.perf_counter() - t0
+                done.append((ch, info["base"], info["parameters"], seconds))
+                timings[ch.stem] = {**timings.get(ch.stem, {}), "seconds": round(seconds, 3), "cached": False}
+                tqdm.write(f"{where}: executed in {_duration(seconds)}", file=sys.stderr)
+            waiting = stopped
+            if not waiting:
+                break
+            jobs = schedule.pending(pending_file)
+            asked = {schedule.run_key(ds, c, t, device) for ds, c, t in jobs}
+            if not jobs or asked <= asked_before:
+                raise ChapterError(
+                    f"chapters {', '.join(t[1].stem for t in waiting)} stopped for runs that "
+                    + ("they did not name" if not jobs else "were trained in the stage before: the chapters' kernels "
+                       "compute other run keys than the builder (another study package, torch or device?)"))
+            asked_before |= asked
+            t0 = time.perf_counter()
+            tqdm.write(f"stage {len(stages) + 1}: {len(jobs)} runs that {len(waiting)} chapter(s) asked for, trained "
+                       "together", file=sys.stderr)
+            schedule.run_many(jobs, root / "data", desc=f"stage {len(stages) + 1}", progress=True,
+                              workers=workers or None, scheduler=scheduler or None, device=device)
+            stages.append({"runs": len(jobs), "chapters": [t[1].stem for t in waiting],
+                           "seconds": round(time.perf_counter() - t0, 3)})
+
+
+@contextlib.contextmanager
+def _environment(values: dict[str, str]) -> Iterator[None]:
+    """``os.environ`` with ``values`` set, restored after."""
+    saved = {k: os.environ.get(k) for k in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
 
 def plan_totals(root: Path) -> dict[str, float]:
@@ -564,22 +647,27 @@ def render_html(root: Path) -> Path:
     return root / "_build" / "html"
 
 
-def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bool, scheduler: str = "") -> None:
-    """Execute the chapters of the book at ``root`` with ``preset`` (cached), then, if ``html``, render it.
+def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bool, scheduler: str = "",
+          device: str = "cpu") -> None:
+    """Execute the chapters of the book at ``root`` with ``preset`` (cached, their runs planned and trained
+    together: :func:`execute`), then, if ``html``, render it.
 
-    ``scheduler``: '' trains on a local process pool in each chapter; 'local' starts one Dask
-    ``LocalCluster`` for the whole build (loopback only, one single-threaded worker per core); anything
-    else is the address of a Dask scheduler every chapter's runs are sent to. The executed copies land in
-    ``<root>/_build/executed/book/``, their timings in ``_build/executed/timings.json``, and the HTML in
-    ``<root>/_build/html``.
+    ``scheduler``: '' trains on a local process pool; 'local' starts one Dask ``LocalCluster`` for the whole build
+    (loopback only, one single-threaded worker per core); anything else is the address of a Dask scheduler the
+    runs are sent to. ``device``: 'cpu', 'cuda', or 'auto' (a GPU where there is one, said on the terminal). The
+    executed copies land in ``<root>/_build/executed/book/``, their timings in ``_build/executed/timings.json``, and
+    the HTML in ``<root>/_build/html``.
     """
     presets.check(preset)
     root = Path(root).resolve()
     if not root.is_dir():
         raise ConfigError(f"--root {root}: no such folder")
     check_writable(root / EXECUTED / "timings.json", "book output folder")
+    chosen = cluster.device(device)
+    if device == "auto":
+        tqdm.write(f"device: {chosen}" + (" (a GPU is at hand)" if chosen != "cpu" else " (no GPU here)"), file=sys.stderr)
     with _cluster(scheduler) as address:
-        timings = execute(root, preset, force=force, only=only, scheduler=address)
+        timings = execute(root, preset, force=force, only=only, scheduler=address, device=chosen)
     print(timings_table(timings, plan_totals(root)), file=sys.stderr)
     if html:
         index = render_html(root) / "index.html"

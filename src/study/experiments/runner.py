@@ -7,8 +7,8 @@ A chapter opens one runner and calls it::
     rows = runner.seed_runs(cfg)                         # Table 1: Z and X, Y, Z over the preset's seeds
 
 Every training run goes through :meth:`Runner.runs`, which reads cached records and trains the others
-(``study.experiments.runs.run_all``: a local process pool, or a Dask cluster with ``scheduler``), and notes
-each run in the runner's :class:`~study.experiments.runs.Plan`, so a build knows how many models it
+(``study.experiments.schedule.run_all``: a local process pool, or a Dask cluster with ``scheduler``), and notes
+each run in the runner's :class:`~study.experiments.schedule.Plan`, so a build knows how many models it
 trained. The configurations of the paper's experiments are in ``study.experiments.paper``; Table 1's
 configuration is derived once, here (:meth:`Runner.table1_config`), for every chapter.
 """
@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -26,7 +27,8 @@ from typing import Any
 import numpy as np
 
 from study.core import cache
-from study.experiments import paper, realworld, runs, tracker
+from study.experiments import paper, runs, schedule, tracker, videos
+from study.experiments.cluster import DEVICE_ENV
 from study.experiments.presets import Preset, preset
 from study.experiments.runtable import Fitted, Run, Runs
 from study.experiments.stats import scored
@@ -79,16 +81,20 @@ class Runner:
     address (``tls://host:8786``)."""
     render_seed: int = 1000
     """Seed of the rendered throws of the real-world chapter, on which the tracker is calibrated."""
-    plan: runs.Plan = field(default_factory=runs.Plan.from_env, compare=False, repr=False)
-    """Every run this runner was asked for (``study.experiments.runs.Plan``)."""
+    device: str = "cpu"
+    """Where runs train: 'cpu', or a torch device ('cuda'); part of every run's key."""
+    plan: schedule.Plan = field(default_factory=schedule.Plan.from_env, compare=False, repr=False)
+    """Every run this runner was asked for (``study.experiments.schedule.Plan``)."""
 
     @classmethod
     def open(cls, preset_name: str, data_seed: int = 0, data_dir: str | Path = "data", *, workers: int = 0,
-             scheduler: str = "", progress: bool = False, render_seed: int = 1000) -> Runner:
-        """The runner of preset ``preset_name`` on its dataset of ``data_seed`` (simulated once, then cached)."""
+             scheduler: str = "", progress: bool = False, render_seed: int = 1000, device: str | None = None) -> Runner:
+        """The runner of preset ``preset_name`` on its dataset of ``data_seed`` (simulated once, then cached); its
+        runs train on ``device`` (None: ``$STUDY_DEVICE``, which ``study book --device`` sets, else the CPU)."""
         folder = Path(data_dir).resolve()
         ds = synth.dataset(preset_name, seed=data_seed, data_dir=folder, progress=progress)
-        return cls(ds, preset(preset_name), folder, workers, progress, scheduler, render_seed)
+        return cls(ds, preset(preset_name), folder, workers, progress, scheduler, render_seed,
+                   device or os.environ.get(DEVICE_ENV) or "cpu")
 
     def on(self, dataset: Dataset) -> Runner:
         """The same runner on another dataset (the same throws without air, other shapes, ...); it shares this
@@ -109,11 +115,12 @@ class Runner:
     # Runs
 
     def runs(self, cfgs: list[TrainConfig], test: bool = True, desc: str = "runs") -> list[dict[str, Any]]:
-        """The records of ``cfgs`` on this runner's dataset, cached or trained (``runs.run_all``)."""
+        """The records of ``cfgs`` on this runner's dataset, cached or trained (``schedule.run_all``)."""
         for c in cfgs:
-            self.plan.add(self.dataset, c, self.data_dir, test)
-        return runs.run_all(self.dataset, cfgs, self.data_dir, test, desc=desc, progress=self.progress,
-                            workers=self.workers or None, scheduler=self.scheduler or None)
+            self.plan.add(self.dataset, c, self.data_dir, test, self.device)
+        schedule.ask([(self.dataset, c, test) for c in cfgs], self.data_dir, self.device)  # a planned build trains
+        return schedule.run_all(self.dataset, cfgs, self.data_dir, test, desc=desc, progress=self.progress,
+                                workers=self.workers or None, scheduler=self.scheduler or None, device=self.device)
 
     def prefetch(self, batches: Iterable[tuple[Runner, Sequence[TrainConfig], bool]], desc: str = "runs") -> None:
         """Train (or read) every run of ``batches`` -- (runner, configs, scored on the test split?) -- at once,
@@ -122,10 +129,11 @@ class Runner:
         jobs = []
         for r, cfgs, test in batches:
             for c in cfgs:
-                r.plan.add(r.dataset, c, r.data_dir, test)
+                r.plan.add(r.dataset, c, r.data_dir, test, self.device)
                 jobs.append((r.dataset, c, test))
-        runs.run_many(jobs, self.data_dir, desc=desc, progress=self.progress, workers=self.workers or None,
-                      scheduler=self.scheduler or None)
+        schedule.ask(jobs, self.data_dir, self.device)
+        schedule.run_many(jobs, self.data_dir, desc=desc, progress=self.progress, workers=self.workers or None,
+                          scheduler=self.scheduler or None, device=self.device)
 
     def rows(self, cfgs: list[TrainConfig], test: bool = True, desc: str = "runs") -> Runs:
         """The runs of ``cfgs`` on this runner's dataset as a table (:class:`~study.experiments.runtable.Runs`)."""
@@ -141,11 +149,11 @@ class Runner:
     def trained(self, cfg: TrainConfig) -> train.TrainedModel:
         """The kept model of ``cfg`` on this dataset, trained first if no run has left it; in the plan either way,
         so the book's count of models does not depend on what the cache held."""
-        if not runs.model_dir(self.dataset, cfg, self.data_dir).is_dir():
+        if not runs.model_dir(self.dataset, cfg, self.data_dir, self.device).is_dir():
             self.runs([cfg], test=False, desc="model")
         else:
-            self.plan.add(self.dataset, cfg, self.data_dir, test=False)
-        return runs.trained(self.dataset, cfg, self.data_dir)
+            self.plan.add(self.dataset, cfg, self.data_dir, False, self.device)
+        return runs.trained(self.dataset, cfg, self.data_dir, self.device)
 
     def models(self, cfg: TrainConfig, seeds: tuple[int, ...], **changes: Any) -> list[train.TrainedModel]:
         """The kept models of ``cfg`` (with ``changes``) for each seed."""
@@ -217,23 +225,23 @@ class Runner:
     # -----------------------------------------------------------------------------------------
     # The camera: rendered throws, the tracker's error, the model a car would use
 
-    def rendered(self) -> tuple[list[realworld.Video], Any]:
+    def rendered(self) -> tuple[list[videos.Video], Any]:
         """The real-world chapter's rendered throws at the data's frame rate, as long as Table 1's input (the
         videos the tracker is calibrated on), rendered once."""
-        return realworld.book_set(self.preset.name, self.fps, self.preset.length, self.render_seed, self.data_dir)
+        return videos.book_set(self.preset.name, self.fps, self.preset.length, self.render_seed, self.data_dir)
 
     @cached_property
     def _tracker_error(self) -> TrackerError:
-        videos, _ = self.rendered()
-        key = cache.key({"videos": sorted({v.path.parent.name for v in videos}), "n": len(videos),
-                         "track": dataclasses.asdict(TrackConfig(color=videos[0].color, progress=False)),
-                         "code": cache.source_hash(*cache.subpackage_files("see"), "experiments/tracker.py")})
+        rendered, _ = self.rendered()
+        key = cache.key({"videos": sorted({v.path.parent.name for v in rendered}), "n": len(rendered),
+                         "track": dataclasses.asdict(TrackConfig(color=rendered[0].color, progress=False)),
+                         "code": cache.code_hash("tracker-error")})
         path = self.data_dir / "observation" / f"tracker-error-{key}.json"
         try:
             return TrackerError.from_json(json.loads(path.read_text()))
         except (OSError, ValueError, KeyError):
             pass  # not measured yet, or damaged: measure again
-        error = tracker.measure(videos)
+        error = tracker.measure(rendered)
         cache.write_text_atomic(path, json.dumps(error.to_json(), indent=1) + "\n")
         return error
 

@@ -1,0 +1,94 @@
+"""Many runs as one stack (study.learn.stack): a member's result does not depend on its stack, on either time loop."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import pytest
+import torch
+
+from study.experiments import runs, schedule
+from study.learn import native, stack
+from study.learn.config import TrainConfig
+
+SMOKE = TrainConfig(length=1.0, max_epochs=4, patience=2, min_epochs=2, truncation=10)
+"""A short training at the smoke data set's shape; every member below shares it but for seed, rate and dropout."""
+OTHERS = [dataclasses.replace(SMOKE, seed=s, lr=lr, dropout=d, max_epochs=e, min_epochs=min(e, 2)) for s, lr, d, e in
+          ((1, 3e-3, 0.2, 4), (2, 1e-3, 0.0, 2), (3, 1e-3, 0.5, 4), (4, 2e-3, 0.2, 1), (5, 1e-3, 0.2, 4),
+           (6, 1e-3, 0.1, 3), (7, 3e-4, 0.2, 4))]
+"""Other members: other seeds, learning rates, dropouts and epoch caps (so the stack shrinks as they stop)."""
+
+
+def _records(smoke_dataset, cfgs, tmp_path, name) -> list[dict]:
+    jobs = [(smoke_dataset, c, True) for c in cfgs]
+    out = runs.train_stack(jobs, tmp_path / name)
+    for rec in out:
+        assert json.loads(runs.record_path(tmp_path / name, rec["key"]).read_text()) == rec, "written as returned"
+    return [{k: v for k, v in r.items() if k != "train_seconds"} for r in out]
+
+
+@pytest.mark.slow  # trains 12 smoke runs
+@pytest.mark.parametrize("cell", ["peephole", "gru"])
+def test_a_run_gives_the_same_record_alone_in_a_stack_of_3_and_of_8(smoke_dataset, tmp_path, cell):
+    """Bit for bit, train_seconds aside: each member its own seed, batch order, dropout masks, Adam and stop."""
+    base = dataclasses.replace(SMOKE, cell=cell)
+    others = [dataclasses.replace(c, cell=cell) for c in OTHERS]
+    alone = _records(smoke_dataset, [base], tmp_path, "alone")[0]
+    three = _records(smoke_dataset, [others[0], base, others[1]], tmp_path, "three")
+    eight = _records(smoke_dataset, [*others[:4], base, *others[4:7]], tmp_path, "eight")
+    assert three[1] == alone and eight[4] == alone
+    assert three[0] == eight[0] and three[2] == eight[1], "the other members agree too"
+    assert len({r["epochs_run"] for r in eight}) > 1, "members stopped at different epochs: the stack shrank"
+
+
+@pytest.mark.slow  # trains 4 smoke runs on the PyTorch loop
+def test_the_pytorch_loop_too(smoke_dataset, tmp_path):
+    with native.disabled():
+        alone = _records(smoke_dataset, [SMOKE], tmp_path, "alone")[0]
+        three = _records(smoke_dataset, [OTHERS[0], SMOKE, OTHERS[1]], tmp_path, "three")
+    assert three[1] == alone
+
+
+def test_runs_of_another_shape_do_not_stack(smoke_dataset):
+    with pytest.raises(ValueError, match="one shape"):
+        stack.train([(smoke_dataset, SMOKE), (smoke_dataset, dataclasses.replace(SMOKE, hidden=32))])
+    with pytest.raises(ValueError, match="no stacked form"):
+        stack.train([(smoke_dataset, dataclasses.replace(SMOKE, cell="torch-lstm"))])
+
+
+def test_the_scheduler_stacks_runs_of_one_shape_longest_first(smoke_dataset):
+    long = dataclasses.replace(SMOKE, length=2.0)
+    jobs = [(smoke_dataset, c, True) for c in (SMOKE, long, dataclasses.replace(SMOKE, seed=1),
+                                               dataclasses.replace(SMOKE, cell="torch-lstm"),
+                                               dataclasses.replace(long, seed=1), dataclasses.replace(SMOKE, seed=2))]
+    units = schedule.stacks(jobs, range(len(jobs)), size=2)
+    assert units[0] == [1, 4], "the longest input first, its two runs together"
+    assert sorted(map(sorted, units[1:])) == [[0, 2], [3], [5]], "at most two a stack; nn.LSTM alone"
+    alone = schedule.stacks(jobs, range(len(jobs)), size=1)
+    assert alone[:2] == [[1], [4]] and sorted(alone[2:]) == [[0], [2], [3], [5]]
+    assert schedule.stack_size("cpu") == 1 and schedule.stack_size(torch.device("cuda")) > 1
+
+
+def test_a_planned_build_stops_a_chapter_at_runs_not_trained_yet(smoke_dataset, tmp_path, monkeypatch):
+    """In a build that trains every chapter's runs together, asking for runs not trained writes them down and
+    stops; runs that are trained pass; outside such a build, asking does nothing."""
+    data = tmp_path / "data"
+    ds = dataclasses.replace(smoke_dataset, path=tmp_path / "smoke.npz")
+    from study.simulate import data as data_files
+
+    data_files.save(ds, ds.path)
+    jobs = [(ds, SMOKE, True), (ds, dataclasses.replace(SMOKE, seed=1), False)]
+    schedule.ask(jobs, data)  # not planning: nothing happens
+    pending = tmp_path / "pending.jsonl"
+    monkeypatch.setenv(schedule.PENDING_ENV, str(pending))
+    with pytest.raises(schedule.Pending, match="2 runs are not trained yet"):
+        schedule.ask(jobs, data)
+    with pytest.raises(schedule.Pending):
+        schedule.ask(jobs[:1], data)  # asked twice: listed once
+    asked = schedule.pending(pending)
+    assert [(c, t) for _, c, t in asked] == [(c, t) for _, c, t in jobs]
+    fake = {"key": runs.run_key(ds, SMOKE, True), "config": dataclasses.asdict(SMOKE)}
+    runs.record_path(data, fake["key"]).parent.mkdir(parents=True)
+    runs.record_path(data, fake["key"]).write_text(json.dumps(fake))
+    schedule.ask(jobs[:1], data)  # trained now: it passes
