@@ -39,7 +39,7 @@ import numpy as np
 from study import CLASSES
 from study.core.errors import ConfigError, StudyError
 from study.core.progress import Progress
-from study.experiments import paper, verdicts
+from study.experiments import paper, tracker, verdicts
 from study.experiments.videos import (  # noqa: F401  (re-exported: the chapter's videos)
     REAL_CLIPS_DEFAULT,
     REAL_CLIPS_ENV,
@@ -91,13 +91,16 @@ class Tracked:
 
 
 def track_all(videos: Sequence[Video], progress: bool = True) -> dict[str, Tracked]:
-    """Track every video (heights in metres from its object size): file name -> :class:`Tracked`."""
+    """Track every video: file name -> :class:`Tracked`. A rendered throw's heights come from the render's camera at
+    the object's depth (``study.experiments.tracker.track_rendered``); a real clip's, whose camera is unknown, from
+    one scale, the object's known size over its blob's size at rest (``study.see.gaps.set_scale``)."""
     out: dict[str, Tracked] = {}
     with Progress("track videos", total=len(videos), show=progress, unit="video") as bar:
         for v in videos:
             try:
-                out[v.path.name] = Tracked(track.track_video(v.path, track.TrackConfig(color=v.color, progress=False),
-                                                             object_size=v.object_size))
+                cfg = track.TrackConfig(color=v.color, progress=False)
+                out[v.path.name] = Tracked(tracker.track_rendered(v, cfg) if v.truth is not None else
+                                           track.track_video(v.path, cfg, object_size=v.object_size))
             except StudyError as e:
                 out[v.path.name] = Tracked(None, str(e))
             bar.update()

@@ -24,6 +24,7 @@ from tqdm import tqdm
 
 from study.core.cache import write_text_atomic
 from study.core.errors import ConfigError, RenderError, check_range
+from study.see.camera import Camera
 from study.see.video import atomic_writer
 from study.simulate import synth
 from study.simulate.scene import Shape
@@ -173,6 +174,19 @@ def project(model: mujoco.MjModel, data: mujoco.MjData, camera: str, points: np.
     u = 0.5 * width + f * rel[:, 0] / depth - 0.5
     v = 0.5 * height - f * rel[:, 1] / depth - 0.5
     return np.stack([u, v], axis=1)
+
+
+def scene_camera(model: mujoco.MjModel, name: str, width: int, height: int) -> Camera:
+    """The scene's fixed camera ``name`` as a :class:`~study.see.camera.Camera` for a width x height image: its
+    pose in the model's initial state (a fixed camera does not move) and :func:`project`'s focal length."""
+    cid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name)
+    if cid < 0:
+        raise ConfigError(f"camera {name!r} is not in the scene")
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    f = 0.5 * height / np.tan(np.deg2rad(model.cam_fovy[cid]) / 2)
+    return Camera(tuple(float(x) for x in data.cam_xpos[cid]), tuple(float(x) for x in data.cam_xmat[cid]),
+                  float(f), int(width), int(height))
 
 
 def _renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Renderer:

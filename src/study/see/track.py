@@ -2,7 +2,9 @@
 input out.
 
 :func:`track_video` detects the object in every frame (``study.see.detect``), fills short gaps and
-splits at long ones, and sets the scale from pixels to metres (``study.see.gaps``); :func:`to_model_input`
+splits at long ones, smooths the track between its bounces if asked (``study.see.smooth``), and turns image
+positions into heights (``study.see.gaps``): from the camera's geometry and the object's depth when the camera is
+known (``study.see.camera``), else from a ground row and one scale; :func:`to_model_input`
 resamples the result to the classifier's frame rate and cuts or zero-pads it to its input length, as
 the paper did. The pieces are importable from here too, so ``from study import track`` gives the whole
 tracker: :class:`TrackConfig` and the colour presets (``study.see.config``), :class:`Trajectory`
@@ -19,13 +21,16 @@ import numpy as np
 from study.core.errors import TrajectoryError, check_range
 from study.see.config import PRESETS, TrackConfig, parse_hsv
 from study.see.detect import detect_all
-from study.see.gaps import fill_gaps, resample, set_scale
+from study.see.camera import Camera
+from study.see.gaps import fill_gaps, resample, set_camera, set_scale
+from study.see.smooth import smooth
 from study.see.overlay import write_overlay
 from study.see.trackfile import read_csv, write_csv
 from study.see.trajectory import STATUS, Trajectory
 
-__all__ = ["PRESETS", "STATUS", "TrackConfig", "Trajectory", "detect_all", "fill_gaps", "parse_hsv",
-           "read_csv", "resample", "set_scale", "to_model_input", "track_video", "write_csv", "write_overlay"]
+__all__ = ["PRESETS", "STATUS", "Camera", "TrackConfig", "Trajectory", "detect_all", "fill_gaps", "parse_hsv",
+           "read_csv", "resample", "set_camera", "set_scale", "smooth", "to_model_input", "track_video", "write_csv",
+           "write_overlay"]
 
 
 def track_video(
@@ -35,10 +40,25 @@ def track_video(
     ground_v: float | None = None,
     object_size: float | None = None,
     metres_per_pixel: float | None = None,
+    camera: Camera | None = None,
+    depth: float | np.ndarray | None = None,
+    rest_height: float = 0.0,
 ) -> Trajectory:
-    """Track, fill short gaps, split at long ones and set the scale: the whole pipeline for one video."""
+    """Track, fill short gaps, split at long ones, smooth between bounces if ``cfg.smooth`` asks, and turn pixels
+    into heights: the whole pipeline for one video.
+
+    With a ``camera`` (the one that filmed the video) and the object's ``depth`` along its view axis (metres; a
+    number, or one per frame), heights come from the camera's geometry (``study.see.gaps.set_camera``: its tilt
+    and the object's depth, no scale assumed), above ``rest_height``; else from one scale
+    (``study.see.gaps.set_scale``: ``metres_per_pixel``, or ``object_size`` over the blob's size at rest)."""
     cfg = cfg or TrackConfig()
     traj = fill_gaps(detect_all(path, cfg), cfg.max_gap)
+    if cfg.smooth:
+        traj = smooth(traj, cfg.smooth, cfg.smooth_order)
+    if camera is not None:
+        if depth is None:
+            raise TrajectoryError(f"{path}: a camera without the object's depth gives no height; pass depth")
+        return set_camera(traj, camera, depth, rest_height)
     return set_scale(traj, ground_v=ground_v, object_size=object_size, metres_per_pixel=metres_per_pixel)
 
 

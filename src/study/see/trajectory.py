@@ -50,6 +50,12 @@ class Trajectory:
     """Units of :attr:`height` per image pixel: metres per pixel with ``units`` 'm', 1.0 with 'px'."""
     units: str = "px"
     """Units of :attr:`height`: 'px' or 'm'."""
+    z: np.ndarray | None = field(default=None, repr=False)
+    """(n,) float64 heights of the centre in :attr:`units` where they come from more than the image row: the
+    camera's geometry and the object's depth (``study.see.gaps.set_camera``: metres above the ground plane), or
+    a CSV's own heights; None: from the row, by :attr:`ground_v` and :attr:`height_per_pixel`."""
+    ground_z: float = 0.0
+    """The value of :attr:`z` with the object's centre at ground level (its rest height), when :attr:`z` is set."""
 
     @property
     def measured(self) -> np.ndarray:
@@ -68,7 +74,10 @@ class Trajectory:
 
     @property
     def height(self) -> np.ndarray:
-        """(n,) float64, height of the centre above the ground row, up positive, in :attr:`units`."""
+        """(n,) float64, height of the centre above its height at rest (the ground row), up positive, in
+        :attr:`units`: from :attr:`z` when it is set, else from the image row."""
+        if self.z is not None:
+            return self.z - self.ground_z
         return (self.ground_v - self.v) * self.height_per_pixel
 
     def segments(self) -> list[Trajectory]:
@@ -89,4 +98,4 @@ class Trajectory:
     def take(self, idx) -> Trajectory:
         """The rows ``idx`` (a slice or index array) as a new trajectory."""
         arrays = {k: getattr(self, k)[idx] for k in ("t", "u", "v", "status", "segment", "confidence", "diameter")}
-        return replace(self, **arrays)
+        return replace(self, **arrays, z=None if self.z is None else self.z[idx])
