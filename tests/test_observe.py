@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 
 from study.core.errors import ConfigError, TrajectoryError
+from study.learn.config import TrainConfig
+from study.learn.inputs import observation, observe_fields
 from study.simulate import observe
 
 
@@ -127,3 +129,99 @@ def test_turned_across_view_turns_each_throw_to_cross_the_camera():
     assert (d[:, 0] >= 0).all()
     np.testing.assert_allclose(np.linalg.norm(d, axis=1), np.linalg.norm(x[:, -1, :2] - x[:, 0, :2], axis=1))
     np.testing.assert_allclose(turned[:, :, 2], x[:, :, 2])  # heights untouched
+
+
+# ---------------------------------------------------------------------------------------------
+# The tracker's error model: a per-throw offset, AR(1) noise, one level in flight and one in contact
+
+
+def landings(n: int, T: int = 90, seed: int = 0) -> np.ndarray:
+    """(n, T) bool contact flags: each throw in the air until a random frame, then on the ground."""
+    land = np.random.default_rng(seed).integers(10, T - 10, n)
+    return np.arange(T)[None, :] >= land[:, None]
+
+
+def test_in_contact_is_a_band_above_the_rest_height():
+    z = np.array([0.099, 0.1, 0.104, 0.106, 0.5])
+    assert observe.in_contact(z).tolist() == [True, True, True, False, False]
+    assert observe.in_contact(z, rest_height=0.2, band=0.0).tolist() == [True] * 4 + [False]
+
+
+def test_the_draw_has_the_statistics_of_its_parameters():
+    contact = landings(4000)
+    m = observe.TrackerNoise(flight=0.02, contact=0.008, offset=0.006, rho=0.8)
+    e = m.draw(contact, np.random.default_rng(1))
+    assert e.shape == contact.shape
+    offsets = observe.TrackerNoise(offset=0.006).draw(contact, np.random.default_rng(2))
+    assert (offsets == offsets[:, :1]).all(), "an offset is one draw per throw"
+    assert offsets[:, 0].std() == pytest.approx(0.006, rel=0.05)
+    u = observe.TrackerNoise(flight=0.02, contact=0.008, rho=0.8).draw(contact, np.random.default_rng(3))
+    assert u[~contact].std() == pytest.approx(0.02, rel=0.03) and u[contact].std() == pytest.approx(0.008, rel=0.03)
+    both = ~contact[:, :-1] & ~contact[:, 1:]
+    a, b = u[:, :-1][both], u[:, 1:][both]
+    assert np.corrcoef(a, b)[0, 1] == pytest.approx(0.8, abs=0.01)
+    assert np.std(b - a) == pytest.approx(m.step_sd(), rel=0.03)
+    assert m.step_sd() == pytest.approx(0.02 * np.sqrt(0.4))
+    rest = contact[:, :-1] & contact[:, 1:]
+    assert np.std(np.diff(e, axis=1)[rest]) == pytest.approx(m.step_sd(in_contact=True), rel=0.03)
+    assert e[~contact].std() == pytest.approx(m.position_sd(), rel=0.03), "offset and flight add in quadrature"
+    assert e[contact].std() == pytest.approx(m.position_sd(in_contact=True), rel=0.03)
+
+
+def test_white_noise_is_the_special_case():
+    x = parabolas(30)
+    sigma = 0.012
+    white = observe.TrackerNoise.white(sigma)
+    assert (white.offset, white.rho, white.flight, white.contact) == (0.0, 0.0, sigma, sigma)
+    np.testing.assert_array_equal(observe.tracker_noise(x, white, np.random.default_rng(4)),
+                                  observe.noise(x, sigma, np.random.default_rng(4)))
+    a = observe.Observation(tracker=white, drop=0.1).apply(x, 30.0, np.random.default_rng(5))
+    b = observe.Observation(noise=sigma, drop=0.1).apply(x, 30.0, np.random.default_rng(5))
+    np.testing.assert_array_equal(a, b)
+    correlated = observe.Observation(tracker=observe.TrackerNoise(flight=sigma, contact=sigma, rho=0.5))
+    assert not np.array_equal(correlated.apply(x, 30.0, np.random.default_rng(5))[:, :, 2], b[:, :, 2])
+
+
+def test_an_observation_draws_the_contact_level_where_the_exact_object_rests():
+    x = np.zeros((200, 60, 3))
+    x[:, :30, 2] = 1.0  # in the air for 30 frames, then at rest on the ground
+    x[:, 30:, 2] = observe.REST_HEIGHT
+    ob = observe.Observation(tracker=observe.TrackerNoise(flight=0.03, contact=0.005))
+    e = ob.apply(x, 30.0, np.random.default_rng(6))[:, :, 2] - x[:, :, 2]
+    assert e[:, :30].std() == pytest.approx(0.03, rel=0.05) and e[:, 30:].std() == pytest.approx(0.005, rel=0.05)
+
+
+def test_train_config_fields_round_trip_the_tracker_model():
+    m = observe.TrackerNoise(flight=0.02, contact=0.008, offset=0.006, rho=0.84)
+    ob = observe.Observation(tracker=m, drop=0.03)
+    cfg = TrainConfig(observe="fixed", **observe_fields(ob))
+    cfg.check()
+    back = observation(cfg)
+    assert back.drop == 0.03 and back.tracker.contact == pytest.approx(m.contact)
+    assert (back.tracker.flight, back.tracker.offset, back.tracker.rho) == (m.flight, m.offset, m.rho)
+    white = TrainConfig(observe="fixed", **observe_fields(observe.Observation(noise=0.01)))
+    fields = (white.observe_noise, white.observe_offset, white.observe_rho, white.observe_contact_ratio)
+    assert fields == (0.01, 0, 0, 1)
+    assert observation(white).tracker == observe.TrackerNoise.white(0.01)
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: observe.TrackerNoise(rho=1.0).validate(), "TrackerNoise.rho"),
+    (lambda: observe.TrackerNoise(flight=-0.01).validate(), "TrackerNoise.flight"),
+    (lambda: observe.TrackerNoise(contact=float("nan")).validate(), "TrackerNoise.contact"),
+    (lambda: observe.TrackerNoise(offset=-1.0).validate(), "TrackerNoise.offset"),
+    (lambda: observe.TrackerNoise(band=-0.001).validate(), "TrackerNoise.band"),
+    (lambda: observe.Observation(tracker=observe.TrackerNoise(rho=-1.0)).validate(), "Observation.tracker.rho"),
+    (lambda: observe.Observation(noise=0.01, tracker=observe.TrackerNoise.white(0.01)).validate(),
+     "Observation.noise"),
+])
+def test_bad_model_parameters_name_their_field(make, match):
+    with pytest.raises(ConfigError, match=match):
+        make()
+
+
+@pytest.mark.parametrize("field, value", [("observe_rho", 1.0), ("observe_rho", -1.5), ("observe_offset", -0.01),
+                                          ("observe_contact_ratio", -1.0), ("observe_offset", float("inf"))])
+def test_bad_train_config_model_fields_name_themselves(field, value):
+    with pytest.raises(ConfigError, match=f"TrainConfig.{field}"):
+        TrainConfig(**{field: value}).check()

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from study.core import cache
-from study.experiments import paper, runs, schedule, tracker, videos
+from study.experiments import paper, runs, schedule, tracker, tracker_model, videos
 from study.experiments.cluster import DEVICE_ENV
 from study.experiments.presets import Preset, preset
 from study.experiments.runtable import Fitted, Run, Runs
@@ -35,11 +35,16 @@ from study.experiments.stats import scored
 from study.experiments.tracker import TrackerError
 from study.learn import baseline, train
 from study.learn.config import Cell, Dims, Inputs, TrainConfig
+from study.learn.inputs import observe_fields
 from study.learn.metrics import Interval
 from study.see.config import TrackConfig
 from study.simulate import data, observe, synth
 from study.simulate.data import Dataset
 
+
+DEVELOPMENT_RENDER_SEED = 2000
+"""Seed of the development renders: throws other than the book's (``Runner.render_seed``), rendered alike, on which
+the tracker's error model is fitted (``Runner.tracker_fit``)."""
 
 OBSERVED_SEEDS: dict[str, int] = {"test": 3, "train": 4}
 """Seeds of the one observed draw of each split that chapters score learners on alike (:meth:`Runner.observed`)."""
@@ -250,9 +255,34 @@ class Runner:
         build and cached by the videos' key, the tracker's settings and the tracker's code."""
         return self._tracker_error
 
+    def tracker_decomposition(self) -> dict[str, tracker.Decomposition]:
+        """The tracker's error on the rendered throws taken apart (``study.experiments.tracker.decompose``), for
+        each of :data:`study.experiments.tracker.TRACKERS` (the settings before and after the shaded faces)."""
+        rendered, _ = self.rendered()
+        return {name: tracker.decompose(rendered, cfg) for name, cfg in tracker.TRACKERS.items()}
+
+    def development_rendered(self) -> list[videos.Video]:
+        """Throws rendered as the book's are (:meth:`rendered`), from :data:`DEVELOPMENT_RENDER_SEED`: what the
+        tracker's settings and its error model are chosen on, never the book's."""
+        rendered, _ = videos.book_set(self.preset.name, self.fps, self.preset.length, DEVELOPMENT_RENDER_SEED,
+                                      self.data_dir)
+        return rendered
+
+    @cached_property
+    def _tracker_fit(self) -> tracker_model.TrackerFit:
+        fitted = tracker_model.fit(tracker_model.series_of(self.development_rendered()))
+        return dataclasses.replace(fitted, fitted_on=f"{fitted.n_videos} development renders (render seed "
+                                                     f"{DEVELOPMENT_RENDER_SEED}, not the book's {self.render_seed})")
+
+    def tracker_fit(self) -> tracker_model.TrackerFit:
+        """The tracker's error model (``study.experiments.tracker_model.fit``: a per-throw offset, correlated noise, one
+        level in flight and one in contact) fitted on the development renders, tracked end to end."""
+        return self._tracker_fit
+
     def observation(self) -> observe.Observation:
-        """The calibrated observation: the tracker's noise and share of lost frames."""
-        return self.tracker_error().observation()
+        """The calibrated observation: the tracker's error as its fitted model draws it, and its share of lost
+        frames (:meth:`tracker_fit`)."""
+        return self.tracker_fit().observation()
 
     def observed(self, split: str, ob: observe.Observation, n_frames: int) -> np.ndarray:
         """The first ``n_frames`` of this dataset's ``split`` ('train' or 'test') as ``ob`` observes them: the one
@@ -264,7 +294,7 @@ class Runner:
         """``cfg`` trained on random observations, its validation observed as the calibrated tracker (or ``ob``)
         would."""
         ob = ob or self.observation()
-        return dataclasses.replace(cfg, observe="randomised", observe_noise=ob.noise, observe_drop=ob.drop)
+        return dataclasses.replace(cfg, observe="randomised", **observe_fields(ob))
 
     def candidates(self, cfgs: dict[str, TrainConfig], ob: observe.Observation | None = None) -> dict[str, TrainConfig]:
         """Each of ``cfgs`` (name -> config) trained on exact positions and on random observations (names

@@ -5,7 +5,10 @@ camera and a colour tracker do not (``study.see`` measures how far they do not).
 takes trajectories ``x`` (n, T, 3) metres sampled at ``fps`` and returns what the classifier would be
 given instead, in the same shape and units, seeded by the ``rng`` it is handed:
 
-- :func:`noise`: Gaussian position error of a given size (the tracker's, measured on rendered video);
+- :func:`noise`: white Gaussian position error of a given size;
+- :func:`tracker_noise`: the tracker's error as :class:`TrackerNoise` models it (fitted on rendered video,
+  ``study.experiments.tracker_model``): a per-throw offset plus noise correlated from frame to frame, of one size in
+  flight and another while the object touches the ground (:func:`in_contact`); white noise is its special case;
 - :func:`drop`: frames the tracker loses (motion blur, occlusion), filled as the tracker fills them
   (:func:`fill_runs`: linear interpolation over short gaps);
 - :func:`camera_rate`: another camera frame rate, resampled to the model's by linear interpolation, as
@@ -57,6 +60,109 @@ def noise(x: np.ndarray, sigma: float | np.ndarray, rng: np.random.Generator, di
         raise ConfigError(f"noise sigma = {sigma!r} m; it must be >= 0 (the tracker's error, in metres)")
     for d in dims:
         x[:, :, d] += rng.standard_normal(x.shape[:2]) * s[:, None]
+    return x
+
+
+REST_HEIGHT = 0.1
+"""The study's object's centre height at rest, metres: the 20 cm cube on a face (``study.simulate.scene.Shape``)."""
+CONTACT_BAND = 0.005
+"""A frame is in contact when the exact centre is at most this far above its rest height, metres: the object lies
+or slides on a face (a tumbling box touching the ground on an edge or a corner only, for a frame, does not count)."""
+
+
+def in_contact(z: np.ndarray, rest_height: float = REST_HEIGHT, band: float = CONTACT_BAND) -> np.ndarray:
+    """Frames in which the object touches the ground: the exact centre heights ``z`` (any shape, metres) at most
+    ``band`` above ``rest_height``; bool, the shape of ``z``."""
+    return np.asarray(z, dtype=np.float64) <= rest_height + band
+
+
+@dataclass(frozen=True)
+class TrackerNoise:
+    """The tracker's height error, one throw at a time: ``e_t = o + s_t u_t``, where
+
+    - ``o`` is the throw's offset, one draw per throw, Gaussian with standard deviation :attr:`offset`;
+    - ``u`` is a stationary Gaussian AR(1) series of unit variance, ``u_t = rho u_{t-1} + sqrt(1 - rho^2) w_t``
+      (``w`` white), so the error keeps its sign and size from one frame to the next with autocorrelation
+      :attr:`rho`;
+    - ``s_t`` is :attr:`flight` while the object is in the air and :attr:`contact` while it touches the ground
+      (:func:`in_contact` on the exact heights).
+
+    So the position error's standard deviation is ``sqrt(offset^2 + s^2)`` and the frame-to-frame error's (what a
+    velocity reads) ``s sqrt(2 (1 - rho))`` within either state. White noise of ``sigma`` is the special case
+    ``offset = 0``, ``rho = 0``, ``flight = contact = sigma`` (:meth:`white`), and draws exactly what
+    :func:`noise` draws from the same generator.
+    """
+
+    flight: float = 0.0
+    """Standard deviation of the error about its offset while the object is in the air, metres."""
+    contact: float = 0.0
+    """The same while the object touches the ground, metres."""
+    offset: float = 0.0
+    """Standard deviation of the per-throw offset, metres (one draw per throw, the same in every frame)."""
+    rho: float = 0.0
+    """Lag-1 autocorrelation of the varying error, in (-1, 1) (0: white from frame to frame)."""
+    band: float = CONTACT_BAND
+    """How far above its rest height the exact centre counts as touching the ground, metres (:func:`in_contact`)."""
+
+    @classmethod
+    def white(cls, sigma: float) -> TrackerNoise:
+        """White noise of standard deviation ``sigma`` metres in every frame: no offset, no correlation."""
+        return cls(flight=sigma, contact=sigma)
+
+    def validate(self, where: str = "TrackerNoise") -> None:
+        """Raise :class:`ConfigError` naming the first field out of range (``where.field``)."""
+        for name in ("flight", "contact", "offset"):
+            check_range(f"{where}.{name} (metres)", getattr(self, name), 0.0, 10.0)
+        check_range(f"{where}.rho", self.rho, -1.0, 1.0, lo_open=True, hi_open=True)
+        check_range(f"{where}.band (metres)", self.band, 0.0, 10.0)
+
+    @property
+    def exact(self) -> bool:
+        """No error at all."""
+        return self.flight == 0 and self.contact == 0 and self.offset == 0
+
+    def position_sd(self, in_contact: bool = False) -> float:
+        """Standard deviation of the position error in flight (or in contact), offset included, metres."""
+        return math.hypot(self.offset, self.contact if in_contact else self.flight)
+
+    def describe(self) -> str:
+        """The model in words, millimetres: ``offset 8.0 mm, 23.0 mm in flight, 8.0 mm in contact, lag-1
+        autocorrelation 0.84``."""
+        return (f"offset {1000 * self.offset:.1f} mm, {1000 * self.flight:.1f} mm in flight, "
+                f"{1000 * self.contact:.1f} mm in contact, lag-1 autocorrelation {self.rho:.2f}")
+
+    def step_sd(self, in_contact: bool = False) -> float:
+        """Standard deviation of the error's change from one frame to the next within one state, metres."""
+        s = self.contact if in_contact else self.flight
+        return s * math.sqrt(2 * (1 - self.rho))
+
+    def draw(self, contact: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """The errors (n, T) metres of ``n`` throws whose frames touch the ground where ``contact`` (n, T) bool."""
+        self.validate()
+        contact = np.asarray(contact, dtype=bool)
+        if contact.ndim != 2:
+            raise TrajectoryError(f"contact flags: shape {contact.shape}; expected (n, T)")
+        w = rng.standard_normal(contact.shape)  # first, so that white noise draws what noise() draws
+        u = w
+        if self.rho != 0:
+            u = np.empty_like(w)
+            u[:, 0] = w[:, 0]
+            c = math.sqrt(1 - self.rho**2)
+            for t in range(1, w.shape[1]):
+                u[:, t] = self.rho * u[:, t - 1] + c * w[:, t]
+        e = np.where(contact, self.contact, self.flight) * u
+        if self.offset > 0:
+            e = e + rng.standard_normal(len(e))[:, None] * self.offset
+        return e
+
+
+def tracker_noise(x: np.ndarray, model: TrackerNoise, rng: np.random.Generator,
+                  rest_height: float = REST_HEIGHT) -> np.ndarray:
+    """``x`` (n, T, 3) metres with the tracker's height error drawn from ``model`` added to the height; which
+    frames touch the ground is read from ``x``'s own heights (:func:`in_contact`, the exact ones)."""
+    x = _check(x).copy()
+    model.validate()
+    x[:, :, Z] += model.draw(in_contact(x[:, :, Z], rest_height, model.band), rng)
     return x
 
 
@@ -182,7 +288,7 @@ def turned_across_view(x: np.ndarray) -> np.ndarray:
     return x
 
 
-def perspective(x: np.ndarray, camera: Camera, rest_height: float = 0.1) -> np.ndarray:
+def perspective(x: np.ndarray, camera: Camera, rest_height: float = REST_HEIGHT) -> np.ndarray:
     """The heights one camera and the tracker recover: (n, T, 3) with x = y = 0 (one camera gives no depth)
     and z from the image row, as ``study.see.track`` computes it.
 
@@ -215,7 +321,7 @@ def perspective(x: np.ndarray, camera: Camera, rest_height: float = 0.1) -> np.n
     return out
 
 
-def height_scale(x: np.ndarray, factor: float | np.ndarray, rest_height: float = 0.1) -> np.ndarray:
+def height_scale(x: np.ndarray, factor: float | np.ndarray, rest_height: float = REST_HEIGHT) -> np.ndarray:
     """Heights above the resting height multiplied by ``factor`` (a scalar or (n,)): a wrong pixel scale."""
     x = _check(x).copy()
     k = np.broadcast_to(np.asarray(factor, dtype=np.float64), (len(x),))
@@ -228,11 +334,11 @@ def height_scale(x: np.ndarray, factor: float | np.ndarray, rest_height: float =
 @dataclass(frozen=True)
 class Observation:
     """One way of observing a trajectory; the default observes it exactly. :meth:`apply` runs, in order:
-    the camera (its frame rate, then its perspective if ``camera`` is set), the tracker's noise, its
-    dropped frames, and a height-scale error."""
+    the camera (its frame rate, then its perspective if ``camera`` is set), the tracker's noise (white, or
+    ``tracker``'s), its dropped frames, and a height-scale error."""
 
     noise: float = 0.0
-    """Standard deviation of the tracker's position error, metres."""
+    """Standard deviation of the tracker's position error as white noise, metres (0 where ``tracker`` is set)."""
     drop: float = 0.0
     """Share of frames the tracker loses, in [0, 1)."""
     camera_fps: float | None = None
@@ -243,9 +349,16 @@ class Observation:
     """Factor on every height above the resting height (an error in the pixel scale)."""
     max_gap: int = 6
     """Longest gap the tracker fills, frames (``study.see.config.TrackConfig.max_gap``)."""
+    tracker: TrackerNoise | None = None
+    """The tracker's error as its fitted model draws it (:class:`TrackerNoise`); None: white noise of ``noise``."""
 
     def validate(self) -> None:
         check_range("Observation.noise (metres)", self.noise, 0.0, 10.0)
+        if self.tracker is not None:
+            self.tracker.validate("Observation.tracker")
+            if self.noise != 0:
+                raise ConfigError(f"Observation.noise = {self.noise!r} with a tracker model: set one of them "
+                                  "(white noise of noise, or tracker's), the other to its default")
         check_range("Observation.drop", self.drop, 0.0, 1.0, hi_open=True)
         check_range("Observation.height_factor", self.height_factor, 0.0, 100.0, lo_open=True)
         if self.camera_fps is not None:
@@ -254,7 +367,7 @@ class Observation:
             self.camera.validate()
 
     def apply(self, x: np.ndarray, fps: float, rng: np.random.Generator, out_fps: float | None = None,
-              rest_height: float = 0.1) -> np.ndarray:
+              rest_height: float = REST_HEIGHT) -> np.ndarray:
         """``x`` (n, T, 3) metres at ``fps`` as observed: (n, T', 3) at ``out_fps`` (default ``fps``)."""
         self.validate()
         out_fps = fps if out_fps is None else out_fps
@@ -263,7 +376,9 @@ class Observation:
             y = camera_rate(y, fps, self.camera_fps or fps, out_fps)
         if self.camera is not None:
             y = perspective(y, self.camera, rest_height=rest_height)
-        if self.noise > 0:
+        if self.tracker is not None and not self.tracker.exact:
+            y = tracker_noise(y, self.tracker, rng, rest_height=rest_height)
+        elif self.noise > 0:
             y = noise(y, self.noise, rng)
         if self.drop > 0:
             y = drop(y, self.drop, rng, self.max_gap)
@@ -272,7 +387,7 @@ class Observation:
         return y
 
     def observe(self, x: np.ndarray, fps: float, seed: int, frames: int | None = None,
-                rest_height: float = 0.1) -> np.ndarray:
+                rest_height: float = REST_HEIGHT) -> np.ndarray:
         """``x`` (n, T, 3) metres as observed (:meth:`apply`), drawn from a generator seeded by ``seed``, cut
         to its first ``frames`` frames (all if None): (n, frames, 3) metres."""
         y = self.apply(x, fps, np.random.default_rng(seed), rest_height=rest_height)
@@ -304,7 +419,7 @@ class Randomisation:
 
 
 def randomised(x: np.ndarray, fps: float, rng: np.random.Generator, ranges: Randomisation = Randomisation(),
-               rest_height: float = 0.1) -> np.ndarray:
+               rest_height: float = REST_HEIGHT) -> np.ndarray:
     """Each trajectory of ``x`` through an observation drawn from ``ranges``: what a classifier is trained
     on when it must cope with whatever camera and tracker it gets. (n, T, 3) in, (n, T, 3) out."""
     x = _check(x)
