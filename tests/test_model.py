@@ -135,15 +135,79 @@ def test_velocity_channels_are_the_positions_and_their_differences_times_the_fra
     assert Features(3, "positions").n_channels == 3 and Features(3, "velocity").n_channels == 6
 
 
+def test_speed_channels_are_the_height_its_velocity_and_the_horizontal_speed():
+    from study.learn.model import Features
+
+    f = Features(3, "speed", fps=10.0)
+    x = torch.tensor([[[0.0, 0.0, 1.0], [0.3, -0.4, 0.8], [0.3, -0.4, 0.8]]])  # (1, 3, 3) metres
+    torch.testing.assert_close(f.raw(x), torch.tensor([[[1.0, 0.0, 0.0], [0.8, -2.0, 5.0], [0.8, 0.0, 0.0]]]))
+    torch.testing.assert_close(f.raw(x[:, 1:], prev=x[:, 0]), f.raw(x)[:, 1:]), "the frame before carries over"
+    assert f.n_channels == 3 and Features(1, "speed").n_channels == 2
+    z = torch.randn(2, 7, 1, dtype=torch.float64)
+    assert torch.equal(Features(1, "speed").raw(z), Features(1, "velocity").raw(z)), "on Z alone: the velocity's"
+
+
+def _turned(x: torch.Tensor, degrees: float | np.ndarray) -> torch.Tensor:
+    """``x`` (B, T, 3) turned about the vertical through the origin (``study.learn.inputs.rotated``)."""
+    from study.learn.inputs import rotated
+
+    a = np.broadcast_to(np.asarray(degrees, dtype=np.float64), (x.shape[0],))
+    return torch.from_numpy(rotated(x.numpy(), a))
+
+
+@pytest.mark.parametrize("cell", CELLS)
+def test_a_throw_turned_about_the_vertical_gets_the_same_answer_from_the_speed_input_only(cell):
+    """Every throw starts at x = y = 0 with its heading uniform on the circle: the 'speed' network's answer does not
+    depend on it; a network on the positions (or their signed velocity) answers otherwise."""
+    torch.manual_seed(0)
+    x = torch.cumsum(0.1 * torch.randn(4, 15, 3, dtype=torch.float64), dim=1)
+    x[:, 0, :2] = 0.0  # launched at the origin
+    angles = np.array([37.0, 90.0, -120.0, 179.0])
+    for inputs in INPUTS:
+        torch.manual_seed(1)
+        net = normalised(Classifier(3, hidden=8, cell=cell, inputs=inputs).double().eval())
+        with torch.no_grad():
+            before, after = net(x), net(_turned(x, angles))
+        gap = float((torch.softmax(before, -1) - torch.softmax(after, -1)).abs().max())
+        if inputs == "speed":
+            assert gap < 1e-12, f"{cell}: turning the throw moved the answer by {gap}"
+        else:
+            assert gap > 1e-3, f"{cell}, {inputs}: the answer should depend on the heading"
+
+
+def test_the_numpy_streamer_of_a_speed_network_ignores_the_heading_frame_by_frame():
+    torch.manual_seed(0)
+    net = normalised(Classifier(3, hidden=8, inputs="speed").double().eval())
+    x = torch.cumsum(0.1 * torch.randn(1, 12, 3, dtype=torch.float64), dim=1)
+    a, b = Streamer(net, dtype=np.float64), Streamer(net, dtype=np.float64)
+    for plain, turned in zip(x[0].numpy(), _turned(x, 63.0)[0].numpy()):
+        np.testing.assert_allclose(a.push(plain), b.push(turned), atol=1e-12, rtol=0)
+
+
+@pytest.mark.parametrize("inputs", INPUTS)
+def test_the_stacked_first_layer_equals_the_classifier_s(inputs):
+    from study.learn import stack
+    from study.learn.model import Features
+
+    f = Features(3, inputs, fps=30.0).double()
+    C = f.n_channels
+    f.mean.copy_(torch.linspace(-0.3, 0.4, C, dtype=torch.float64))
+    f.std.copy_(torch.linspace(0.5, 2.0, C, dtype=torch.float64))
+    x = torch.randn(2, 4, 9, 3, dtype=torch.float64)  # (K, B, T, D)
+    got = stack.features(x, f.mean.expand(2, C), f.std.expand(2, C), inputs, 30.0)
+    torch.testing.assert_close(got, torch.stack([f(x[k]) for k in range(2)]), atol=0, rtol=0)
+
+
+@pytest.mark.parametrize("inputs, D", [("velocity", 1), ("speed", 3)])
 @pytest.mark.parametrize("cell", ["peephole", "gru"])
-def test_the_split_forward_pass_equals_the_whole_one_with_velocity(cell, backend):
+def test_the_split_forward_pass_equals_the_whole_one_with_velocity(cell, inputs, D, backend):
     """Truncated BPTT runs the first frames without a graph and hands the state on: the velocity of the first
     frame after the split must come from the frame before it, so the two passes give the unsplit answer."""
     from study.learn.train import last_logits
 
     torch.manual_seed(0)
-    net = normalised(Classifier(1, hidden=8, cell=cell, inputs="velocity", fps=30.0).double().eval())
-    x = torch.randn(3, 20, 1, dtype=torch.float64)
+    net = normalised(Classifier(D, hidden=8, cell=cell, inputs=inputs, fps=30.0).double().eval())
+    x = torch.randn(3, 20, D, dtype=torch.float64)
     torch.testing.assert_close(last_logits(net, x, truncation=7), net(x), atol=1e-12, rtol=0)
 
 

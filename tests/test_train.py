@@ -13,7 +13,7 @@ from study import cli
 from study.core.errors import ConfigError, ModelError, TrajectoryError
 from study.core.fielddoc import field_docs
 from study.learn import train
-from study.learn.config import CELLS
+from study.learn.config import CELLS, OLD_MEANING
 from study.simulate import data
 
 TINY = train.TrainConfig(dims="xyz", length=0.5, hidden=8, max_epochs=2, batch_size=8, truncation=5, patience=2)
@@ -119,7 +119,9 @@ def test_model_dir_bad_contents(tmp_path, tm):
 
 def test_bad_config(ds):
     for bad, match in [(dict(dims="xy"), "dims"), (dict(length=0.0), "length"), (dict(length=-1.0), "length"),
-                       (dict(cell="rnn"), "cell"), (dict(truncation=0), "truncation"), (dict(dropout=1.0), "dropout")]:
+                       (dict(cell="rnn"), "cell"), (dict(truncation=0), "truncation"), (dict(dropout=1.0), "dropout"),
+                       (dict(rotate=-1.0), "rotate"), (dict(rotate=181.0), "rotate"),
+                       (dict(rotate=90.0, dims="z"), "rotate .* dims 'z'"), (dict(inputs="heading"), "inputs")]:
         with pytest.raises(ConfigError, match=match):
             train.fit(ds, dataclasses.replace(TINY, **bad), progress=False)
 
@@ -323,26 +325,33 @@ def test_a_diverged_run_says_so_and_keeps_finite_weights(ds, tmp_path):
 
 
 def _as_old_format(folder, version: int) -> None:
-    """Rewrite a saved model directory as format 1 or 2 wrote it: the std as the state dict's 'scale', no
-    'inputs' field (and, for format 1, none of the protocol fields)."""
-    state = torch.load(folder / "weights.pt", weights_only=True)
-    state["scale"] = state.pop("features.std")
-    del state["features.mean"]
-    torch.save(state, folder / "weights.pt")
+    """Rewrite a saved model directory as format 1, 2 or 3 wrote it: none of format 4's fields (``rotate``, ...);
+    before format 3 the std as the state dict's 'scale' and no 'inputs' field (and, for format 1, none of the
+    protocol fields)."""
     cfg = json.loads((folder / "config.json").read_text())
-    for name in ("inputs",) + (("min_epochs", "forget_bias", "forget_init", "clip_norm", "lr_schedule") if version == 1 else ()):
+    for name in OLD_MEANING[3]:  # what format 4 added
+        del cfg[name]
+    if version < 3:
+        state = torch.load(folder / "weights.pt", weights_only=True)
+        state["scale"] = state.pop("features.std")
+        del state["features.mean"]
+        torch.save(state, folder / "weights.pt")
+        del cfg["inputs"]
+    for name in ("min_epochs", "forget_bias", "forget_init", "clip_norm", "lr_schedule") if version == 1 else ():
         del cfg[name]
     (folder / "config.json").write_text(json.dumps(cfg))
     meta = json.loads((folder / "meta.json").read_text())
     (folder / "meta.json").write_text(json.dumps({**meta, "format": f"study.model/{version}"}))
 
 
-@pytest.mark.parametrize("version", [1, 2])
+@pytest.mark.parametrize("version", [1, 2, 3])
 def test_an_old_format_model_reads_as_positions_with_its_old_meaning(tm, ds, tmp_path, version):
     folder = tm.save(tmp_path / "old")
+    assert json.loads((folder / "meta.json").read_text())["format"] == train.FORMAT == "study.model/4"
     _as_old_format(folder, version)
     old = train.load(folder)
     assert old.config.inputs == "positions" and old.net.features.inputs == "positions"
+    assert old.config.rotate == 0.0, "no model before format 4 was trained on turned throws"
     np.testing.assert_array_equal(old.predict_proba(ds.test.x), tm.predict_proba(ds.test.x))
     if version == 1:
         assert (old.config.forget_bias, old.config.min_epochs, old.config.clip_norm) == (0.0, 0, 0.0)
@@ -383,6 +392,51 @@ def test_a_velocity_model_trains_saves_reloads_and_streams(ds, tmp_path):
     v = np.diff(ds.train.x[:, : tm.n_frames, 2], axis=1) * ds.fps
     assert float(tm.net.features.std[1]) == pytest.approx(float(np.concatenate([np.zeros((len(v), 1)), v], 1)[
         train.split_train_val(len(ds.train.y), cfg.val_fraction, cfg.seed)[0]].std()), rel=1e-4)
+
+
+@pytest.mark.slow
+def test_a_speed_model_trains_saves_reloads_and_streams_as_its_first_layer_reads(ds, tmp_path):
+    from study.learn.stream import Streamer
+
+    cfg = dataclasses.replace(TINY, inputs="speed", max_epochs=2)
+    tm = train.fit(ds, cfg, progress=False, warn=False)
+    assert tm.net.features.n_channels == 3
+    back = train.load(tm.save(tmp_path / "s"))
+    assert back.config.inputs == "speed"
+    np.testing.assert_array_equal(back.predict_proba(ds.test.x), tm.predict_proba(ds.test.x))
+    s = Streamer(back.net)
+    streamed = np.array([s.push(f) for f in ds.test.x[0, : tm.n_frames]])
+    np.testing.assert_allclose(streamed, back.predict_proba_frames(ds.test.x[:1])[0], atol=1e-5)
+    tr = train.split_train_val(len(ds.train.y), cfg.val_fraction, cfg.seed)[0]
+    v = np.diff(ds.train.x[tr, : tm.n_frames].astype(np.float64), axis=1) * ds.fps
+    speed = np.concatenate([np.zeros((len(tr), 1)), np.hypot(v[..., 0], v[..., 1])], axis=1)
+    assert float(tm.net.features.mean[2]) == pytest.approx(speed.mean(), rel=1e-4), "standardised on the training part"
+
+
+def test_rotated_training_throws_are_turned_anew_every_epoch_and_seeded(ds):
+    """Each epoch turns every training throw about the vertical by its own angle: the heights and the horizontal
+    distances from the origin stay, the headings move; the draws are the run's own (seeded), the validation part is
+    left as thrown."""
+    T = 15
+    tr, va = train.split_train_val(len(ds.train.y), 0.2, 0)
+    cfg = dataclasses.replace(TINY, rotate=180.0)
+    view, x_val = train.epoch_inputs(ds.train.x[:, :T], tr, va, cfg, ds.fps)
+    plain, plain_val = train.epoch_inputs(ds.train.x[:, :T], tr, va, dataclasses.replace(cfg, rotate=0.0), ds.fps)
+    np.testing.assert_array_equal(x_val, plain_val)
+    exact = plain(0).numpy()
+    e0, e1 = view(0).numpy(), view(1).numpy()
+    assert view(1) is view(1), "an epoch draws once"
+    for e in (e0, e1):
+        np.testing.assert_array_equal(e[..., 2], exact[..., 2])
+        np.testing.assert_allclose(np.hypot(e[..., 0], e[..., 1]), np.hypot(exact[..., 0], exact[..., 1]), atol=1e-6)
+    heading = lambda a: np.arctan2(a[:, -1, 1], a[:, -1, 0])  # noqa: E731
+    assert np.abs(np.angle(np.exp(1j * (heading(e0) - heading(exact))))).max() > 0.5, "turned"
+    assert not np.allclose(e0, e1), "a new angle every epoch"
+    again, _ = train.epoch_inputs(ds.train.x[:, :T], tr, va, cfg, ds.fps)
+    np.testing.assert_array_equal(again(0).numpy(), e0)
+    small, _ = train.epoch_inputs(ds.train.x[:, :T], tr, va, dataclasses.replace(cfg, rotate=10.0), ds.fps)
+    turn = np.abs(np.angle(np.exp(1j * (heading(small(0).numpy()) - heading(exact)))))
+    assert turn.max() <= np.radians(10.0) + 1e-5, "within [-rotate, rotate] degrees"
 
 
 def test_fixed_observation_training_draws_anew_every_epoch_and_is_seeded(ds):

@@ -9,7 +9,8 @@ lets a reader see every run of an experiment in a few lines:
    picks the highest mean.
 2. :func:`seed_configs` -- Table 1: a config for Z and X, Y, Z with the preset's test seeds.
 3. :func:`protocol_changes` -- what each change of the training protocol did, on validation data.
-4. :func:`ablation_configs` -- each cell at its own grid winner, the same test seeds.
+4. :func:`ablation_configs` -- each cell at its own grid winner, the same test seeds; :func:`schedule_configs`
+   -- a grid winner with each learning-rate schedule, and :func:`best_schedule` the one validation prefers.
 5. :func:`length_configs` and :func:`long_memory_config` -- accuracy against input length (the paper's
    Figure 4), and the long inputs again with a memory that spans them (chrono initialisation, full BPTT).
 """
@@ -19,13 +20,13 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, get_args
 
 import numpy as np
 
 from study.experiments.presets import Preset
 from study.experiments.runtable import Runs
-from study.learn.config import Cell, Dims, Inputs, TrainConfig
+from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
 
 TABLE1: dict[Dims, float] = {"xyz": 0.81, "z": 0.78}
 """The paper's Table 1, its "best accuracy" with X, Y, Z and with Z alone: the paper's own numbers, quoted."""
@@ -144,6 +145,29 @@ def protocol_plan(cfg: TrainConfig, p: Preset) -> list[tuple[str, TrainConfig]]:
 def ablation_configs(winners: dict[Cell, TrainConfig], p: Preset) -> list[TrainConfig]:
     """Each cell of ``p.cells`` at its own grid winner, on ``p.ablation_dims``, with the test seeds."""
     return [dataclasses.replace(winners[c], cell=c, seed=s) for c in p.cells for s in p.seeds]
+
+
+SCHEDULES: tuple[Schedule, ...] = get_args(Schedule)
+"""The learning-rate schedules (``TrainConfig.lr_schedule``), the study's protocol first."""
+
+
+def schedule_configs(cfg: TrainConfig, p: Preset) -> list[TrainConfig]:
+    """``cfg`` (a grid's winner) with each of :data:`SCHEDULES`, on the grid's dims and seeds, for validation only:
+    the first schedule's runs are the grid's own at that point."""
+    return [dataclasses.replace(cfg, dims=p.ablation_dims, seed=s, lr_schedule=k) for k in SCHEDULES
+            for s in p.grid_seeds]
+
+
+def best_schedule(runs: Runs) -> Schedule:
+    """The schedule of ``runs`` (:func:`schedule_configs`) with the highest mean validation accuracy over its seeds,
+    ties to the lower mean validation loss, then to the study's protocol: the grid's rule, one field further."""
+    groups = runs.groups("lr_schedule")
+
+    def score(k: Schedule) -> tuple[float, float, int]:
+        g = groups[(k,)]
+        return -float(g.val_accuracies().mean()), float(np.mean(g.values("val_loss"))), SCHEDULES.index(k)
+
+    return min((k for k in SCHEDULES if (k,) in groups), key=score)
 
 
 def length_configs(cfg: TrainConfig, p: Preset) -> list[TrainConfig]:

@@ -28,9 +28,10 @@ Loss = Literal["last", "every"]
 Observe = Literal["exact", "randomised", "fixed"]
 """What a network is trained on: the simulator's positions, positions as a random camera observes them, or
 positions observed with a fixed tracker error (a fresh draw every epoch)."""
-Inputs = Literal["positions", "velocity"]
-"""What the network reads of the positions it is given: the positions (the paper's), or the positions and their
-frame-to-frame velocity (``study.learn.model.Features``)."""
+Inputs = Literal["positions", "velocity", "speed"]
+"""What the network reads of the positions it is given: the positions (the paper's); the positions and their
+frame-to-frame velocity; or what of them does not depend on the throw's heading, the height, its velocity and the
+horizontal speed (``study.learn.model.Features``)."""
 Schedule = Literal["constant", "plateau"]
 """Learning-rate schedules: fixed, or halved when the validation loss stalls for ``patience // 4`` epochs."""
 
@@ -89,14 +90,21 @@ class TrainConfig:
     observe: Observe = "exact"
     """What the network is trained on: 'exact' positions; 'randomised' observations (each epoch sees the
     training split through a camera and tracker drawn at random, ``study.simulate.observe.randomised``); or
-    'fixed', the training split observed with ``observe_noise`` and ``observe_drop``, drawn afresh every epoch
-    (the validation split observed the same way, once)."""
+    'fixed', the training split observed with the tracker's error (``observe_noise`` and the fields after it, the
+    model ``study.simulate.observe.TrackerNoise``) and ``observe_drop``, drawn afresh every epoch (the validation
+    split observed the same way, once)."""
     observe_noise: float = 0.0
-    """The tracker's position error, metres: with 'fixed' the training and validation noise; with 'randomised'
-    the validation split's (and the random noise spans [0, 3x] it)."""
+    """The tracker's position error in flight, metres: with 'fixed' the training and validation noise; with
+    'randomised' the validation split's (and the random white noise spans [0, 3x] it)."""
     observe_drop: float = 0.0
     """The tracker's share of lost frames, for the training split of a 'fixed' run and the validation split of
     an observed one."""
+    observe_offset: float = 0.0
+    """Standard deviation of the tracker's per-throw height offset, metres (one draw per throw and epoch)."""
+    observe_rho: float = 0.0
+    """Lag-1 autocorrelation of the tracker's error from frame to frame, in (-1, 1); 0: white."""
+    observe_contact_ratio: float = 1.0
+    """The tracker's error while the object touches the ground over ``observe_noise`` (in flight); 1: the same."""
     val_fraction: float = 0.2
     """Share of the training split held out for early stopping (and for the grid search)."""
     seed: int = 0
@@ -105,9 +113,13 @@ class TrainConfig:
     """Recurrent cell: 'peephole' (the paper's), 'no-peephole' (the same layer, peepholes fixed at 0), 'torch-lstm'
     (nn.LSTM) or 'gru' (nn.GRU)."""
     inputs: Inputs = "positions"
-    """What the network reads: 'positions' (each coordinate over its standard deviation, the paper's) or
-    'velocity' (each coordinate and its frame-to-frame velocity, both standardised; computed inside the
-    model, so every caller still passes positions)."""
+    """What the network reads: 'positions' (each coordinate over its standard deviation, the paper's), 'velocity'
+    (each coordinate and its frame-to-frame velocity, both standardised) or 'speed' (the height, its velocity and,
+    with X, Y, Z, the horizontal speed, m/s, standardised: nothing that turns with the heading); computed inside
+    the model, so every caller still passes positions."""
+    rotate: float = 0.0
+    """Augmentation, degrees: every epoch turns each training throw about the vertical through the origin by its
+    own angle, uniform in [-rotate, rotate] (180: any heading); 0: none. Needs dims 'xyz'."""
 
     def check(self) -> None:
         """Raise :class:`ConfigError` naming the first field that is out of range or not one of its choices."""
@@ -123,11 +135,18 @@ class TrainConfig:
             raise ConfigError(f"TrainConfig.min_epochs = {self.min_epochs!r}; it must be a whole number >= 0")
         check_range("TrainConfig.observe_noise (metres)", self.observe_noise, 0.0, 1.0)
         check_range("TrainConfig.observe_drop", self.observe_drop, 0.0, 1.0, hi_open=True)
+        check_range("TrainConfig.observe_offset (metres)", self.observe_offset, 0.0, 1.0)
+        check_range("TrainConfig.observe_rho", self.observe_rho, -1.0, 1.0, lo_open=True, hi_open=True)
+        check_range("TrainConfig.observe_contact_ratio", self.observe_contact_ratio, 0.0, 100.0)
         check_range("TrainConfig.forget_bias", self.forget_bias, -10, 10)
         check_range("TrainConfig.clip_norm", self.clip_norm, 0)
         check_range("TrainConfig.dropout", self.dropout, 0, 1, hi_open=True)
         check_range("TrainConfig.lr", self.lr, 0, lo_open=True)
         check_range("TrainConfig.val_fraction", self.val_fraction, 0, 1, lo_open=True, hi_open=True)
+        check_range("TrainConfig.rotate (degrees)", self.rotate, 0.0, 180.0)
+        if self.rotate and self.dims == "z":
+            raise ConfigError(f"TrainConfig.rotate = {self.rotate!r} turns the horizontal coordinates, which dims 'z' "
+                              "does not read; use rotate 0 or dims 'xyz'")
 
     def n_frames(self, fps: float) -> int:
         """T in frames at ``fps``: ``round(length * fps)``, at least 1."""
@@ -157,14 +176,19 @@ def select_inputs(x: np.ndarray, dims: str, n_frames: int, what: str = "trajecto
     return out
 
 
+WHITE: dict[str, object] = {"observe_offset": 0.0, "observe_rho": 0.0, "observe_contact_ratio": 1.0}
+"""The tracker-model fields at white noise: what every model saved before format 4 was observed with."""
+
 OLD_MEANING: dict[int, dict[str, object]] = {
     1: {"min_epochs": 0, "forget_bias": 0.0, "forget_init": "constant", "clip_norm": 0.0, "lr_schedule": "constant",
-        "loss_at": "last", "observe": "exact", "observe_noise": 0.0, "observe_drop": 0.0, "inputs": "positions"},
-    2: {"inputs": "positions"},
+        "loss_at": "last", "observe": "exact", "observe_noise": 0.0, "observe_drop": 0.0, "inputs": "positions",
+        "rotate": 0.0, **WHITE},
+    2: {"inputs": "positions", "rotate": 0.0, **WHITE},
+    3: {"rotate": 0.0, **WHITE},
 }
 """What the fields added after each model format meant before they existed: how a model saved in format 1
-was trained (no minimum, no forget bias, no clipping, a constant learning rate, positions), and that a
-format-2 model reads positions."""
+was trained (no minimum, no forget bias, no clipping, a constant learning rate, positions), that a
+format-2 model reads positions, and that no model before format 4 was trained on rotated throws."""
 
 
 @cache

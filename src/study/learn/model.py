@@ -18,10 +18,13 @@ The gate order (i, f, g, o) and weight layout match ``nn.LSTM``, so with zero pe
 standard deviation on the training split (the paper's), or the positions and their frame-to-frame
 velocity, each standardised (a network that reads the motion, not only where the object is). The
 statistics are buffers, set by :meth:`Classifier.set_normalisation`, so they travel with the weights, and
-every caller -- training, ``study classify``, the frame-by-frame streamers -- passes positions alone.
+every caller -- training, ``study classify``, the frame-by-frame streamers -- passes positions alone. The third
+representation, ``'speed'``, keeps of the motion only what does not turn with the throw's heading: the height, its
+velocity and the horizontal speed (every throw starts at x = y = 0 with its heading uniform on the circle, so the
+signed horizontal channels carry the heading, and no class).
 
 Shapes: B batch, T frames, D input dims (1 for Z, 3 for XYZ), C channels the recurrent layers read (D for
-positions, 2 D with velocity), H hidden units, L layers.
+positions, 2 D with velocity; 2 with speed, 3 from X, Y, Z), H hidden units, L layers.
 """
 
 from __future__ import annotations
@@ -43,12 +46,35 @@ from study.learn.gru import GRU
 State = object
 
 
+def n_channels(n_dims: int, inputs: Inputs) -> int:
+    """C, the channels per frame that ``inputs`` makes of ``n_dims`` position dims (:class:`Features`)."""
+    if inputs == "positions":
+        return n_dims
+    if inputs == "speed":
+        return 2 if n_dims == 1 else 3
+    return 2 * n_dims
+
+
+def motion_channels(x: torch.Tensor, before: torch.Tensor, inputs: Inputs, fps: float) -> torch.Tensor:
+    """The channels of positions ``x`` (..., T, D) metres, given the frame before each (``before``, the same shape),
+    before standardisation: (..., T, C). ``'velocity'``: ``x`` and ``v = (x - before) fps`` (m/s). ``'speed'``:
+    the height, its velocity and, with X, Y, Z (D = 3), the horizontal speed ``|v_h| = sqrt(v_x^2 + v_y^2)``; with
+    Z alone it is ``'velocity'``'s, bit for bit. (Positions need no frame before: :meth:`Features.raw`.)"""
+    v = (x - before) * fps
+    if inputs == "velocity" or x.shape[-1] == 1:
+        return torch.cat([x, v], dim=-1)
+    speed = torch.sqrt(v[..., 0:1] * v[..., 0:1] + v[..., 1:2] * v[..., 1:2])
+    return torch.cat([x[..., 2:3], v[..., 2:3], speed], dim=-1)
+
+
 class Features(nn.Module):
     """The classifier's fixed first layer: positions (B, T, D) metres -> channels (B, T, C) the recurrent
     layers read.
 
     ``'positions'`` (the paper's): ``x_t / std``, C = D. ``'velocity'``: ``(x_t - mean) / std`` and
-    ``(v_t - mean_v) / std_v`` with ``v_t = (x_t - x_{t-1}) fps``, C = 2 D; the first frame's velocity is 0,
+    ``(v_t - mean_v) / std_v`` with ``v_t = (x_t - x_{t-1}) fps``, C = 2 D. ``'speed'``: the same of the height
+    alone, and with X, Y, Z the horizontal speed ``|v_h|`` standardised beside them, C = 3 (2 for Z alone): a
+    throw turned about the vertical gives the same channels. The first frame's velocity (and speed) is 0,
     unless the frame before it is given (the carried state of a trajectory fed in pieces). ``mean`` and
     ``std`` (C,) are buffers, set from the training split by ``study.learn.train.fit``.
     """
@@ -65,7 +91,7 @@ class Features(nn.Module):
     @property
     def n_channels(self) -> int:
         """C: channels per frame."""
-        return self.n_dims * (2 if self.inputs == "velocity" else 1)
+        return n_channels(self.n_dims, self.inputs)
 
     def raw(self, x: torch.Tensor, prev: torch.Tensor | None = None) -> torch.Tensor:
         """The channels of ``x`` (B, T, D) before standardisation: (B, T, C). ``prev`` (B, D): the frame before
@@ -73,7 +99,7 @@ class Features(nn.Module):
         if self.inputs == "positions":
             return x
         before = torch.cat([(x[:, :1] if prev is None else prev[:, None]), x[:, :-1]], dim=1)  # (B, T, D)
-        return torch.cat([x, (x - before) * self.fps], dim=-1)
+        return motion_channels(x, before, self.inputs, self.fps)
 
     def forward(self, x: torch.Tensor, prev: torch.Tensor | None = None) -> torch.Tensor:
         """``x`` (B, T, D) metres -> standardised channels (B, T, C)."""

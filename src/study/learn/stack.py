@@ -368,7 +368,7 @@ def features(x: torch.Tensor, mean: torch.Tensor, std: torch.Tensor, inputs: str
     if inputs == "positions":
         return x / s
     before = torch.cat([x[:, :, :1], x[:, :, :-1]], dim=2)
-    return (torch.cat([x, (x - before) * fps], dim=-1) - m) / s
+    return (model.motion_channels(x, before, inputs, fps) - m) / s  # type: ignore[arg-type]
 
 
 def encode(views: dict[str, torch.Tensor], shape: Shape, x: torch.Tensor, state: list | None = None
@@ -607,8 +607,8 @@ def _epoch(active: list[Member], layout: Layout, sh: Shape, stats: dict, epoch: 
         out = logits(views, sh, x, mean, std, _dropout(going), every)
         losses = _losses(out, y, every)
         finite = []
-        for m, loss in zip(going, losses):
-            value = loss.item()
+        values = torch.stack([loss.detach() for loss in losses]).tolist()  # one device sync for the stack
+        for m, loss, value in zip(going, losses, values):
             if math.isfinite(value):
                 finite.append((m, loss, value))
             else:

@@ -83,14 +83,15 @@ class Streamer:
     Built from a :class:`study.learn.model.Classifier` with a ``peephole`` or ``lstm`` core (eval-mode
     behaviour: no dropout). Inputs are raw metres, turned into the network's channels as its first layer
     (``study.learn.model.Features``) does: divided by the training standard deviation, or, for a network that
-    reads velocity, standardised beside the velocity from the previous frame (0 at the first frame).
+    reads velocity, standardised beside the velocity from the previous frame (0 at the first frame); for one
+    that reads ``'speed'``, the height, its velocity and the horizontal speed, standardised.
     ``reset()`` starts a new trajectory.
     """
 
     def __init__(self, net: torch.nn.Module, dtype: type = np.float32) -> None:
         features = net.features
         self.n_inputs = features.n_dims
-        self.velocity = features.inputs == "velocity"
+        self.inputs = features.inputs
         self.fps = features.fps
         self.layers: list[_Layer] = []
         get = lambda t: t.detach().double().cpu().numpy()  # noqa: E731
@@ -112,6 +113,7 @@ class Streamer:
         self.inv_std = (1.0 / get(features.std)).astype(dtype)  # (C,)
         self.mean = get(features.mean).astype(dtype)  # (C,)
         self.prev = np.zeros(self.n_inputs, dtype)  # the last frame seen, for the velocity
+        self.v = np.empty(self.n_inputs, dtype)  # the velocity into this frame, m/s
         self.channels = np.empty(features.n_channels, dtype)
         self.w_out = np.ascontiguousarray(get(net.head.weight).T, dtype=dtype)  # (H, 2)
         self.b_out = get(net.head.bias).astype(dtype)
@@ -131,26 +133,35 @@ class Streamer:
         if x_t.shape != (self.n_inputs,):
             raise TrajectoryError(f"Streamer.push: frame of shape {x_t.shape}; the model takes ({self.n_inputs},) metres")
         first = self.layers[0]
-        if not self.velocity:
+        if self.inputs == "positions":
             np.multiply(x_t, self.inv_std, out=first.x)
         else:
-            D = self.n_inputs
-            c = self.channels
-            c[:D] = x_t
-            if self.frames:
-                np.subtract(x_t, self.prev, out=c[D:])
-                c[D:] *= self.fps
-            else:
-                c[D:] = 0  # the first frame's velocity
-            self.prev[:] = x_t
-            c -= self.mean
-            np.multiply(c, self.inv_std, out=first.x)
+            self._motion(x_t)
+            np.multiply(self.channels, self.inv_std, out=first.x)
         h = first.step()
         for layer in self.layers[1:]:
             layer.x[:] = h
             h = layer.step()
         self.frames += 1
         return h
+
+    def _motion(self, x_t: np.ndarray) -> None:
+        """``self.channels`` for the frame ``x_t`` (D,) of a network that reads the motion, less the training mean
+        (``study.learn.model.motion_channels``, one frame)."""
+        D, c, v = self.n_inputs, self.channels, self.v
+        if self.frames:
+            np.subtract(x_t, self.prev, out=v)
+            v *= self.fps
+        else:
+            v[:] = 0  # the first frame's velocity
+        self.prev[:] = x_t
+        if self.inputs == "velocity" or D == 1:
+            c[:D] = x_t
+            c[D:] = v
+        else:  # 'speed' from X, Y, Z: the height, its velocity, the horizontal speed
+            c[0], c[1] = x_t[2], v[2]
+            c[2] = np.sqrt(v[0] * v[0] + v[1] * v[1])
+        c -= self.mean
 
     def push(self, x_t: np.ndarray) -> np.ndarray:
         """Consume one frame ``x_t`` (D,) metres; return the class probabilities (2,) after it."""
