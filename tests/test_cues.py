@@ -12,12 +12,24 @@ import pytest
 
 from fake_runs import cache_records
 from study.book import results
+from study.book.publish import glued
 from study.experiments import Runner, cues, paper, runs
 from study.experiments.runtable import Run, Runs
-from study.experiments.tracker import TrackerError
+from study.experiments.tracker import Decomposition, TrackerError
+from study.experiments.tracker_model import TrackerFit
 from study.learn.config import TrainConfig
-from study.learn.metrics import bootstrap_accuracy
+from study.learn.metrics import Interval, bootstrap_accuracy
 from study.simulate import data, observe
+from study.simulate.observe import TrackerNoise
+
+BEFORE = Decomposition(15.0, 7.3, 14.8, 0.78, 17.8, 5.4, 0.274, 0.59, 21.7, 14.8, 92.0, 0.0, 2400, 24)
+AFTER = Decomposition(1.6, 1.2, 3.8, 0.52, 4.9, 2.0, 0.108, 0.156, 4.3, 3.8, 92.0, 0.0, 2400, 24)
+MODEL = TrackerNoise(flight=0.02, contact=0.008, offset=0.006, rho=0.84)
+FIT = TrackerFit(MODEL, drop=0.01, intervals={k: Interval(
+    getattr(MODEL, k), 0.9 * getattr(MODEL, k), 1.1 * getattr(MODEL, k), "bootstrap over 40 videos")
+    for k in ("offset", "rho", "flight", "contact")}, n_videos=40, n_frames=3000, n_contact=1200, step_sd=0.0095,
+    pooled_sd=0.014, bias=0.002, lag1=0.8, fitted_on="40 development renders (render seed 2000)")
+"""A fitted error model as ``Runner.tracker_fit`` gives it."""
 
 
 def drag_only(n: int, seed: int, fps: float = 30.0, frames: int = 60) -> data.Split:
@@ -263,6 +275,8 @@ def whole(tmp_path_factory):
     mp.setattr(runs, "run", would_train)
     mp.setattr(Runner, "rendered", lambda self: (["rendered.mp4"] * 3, None))
     mp.setattr(Runner, "tracker_error", lambda self: TrackerError(1.0, 0.014, 0.05, 90, 0.014))
+    mp.setattr(Runner, "tracker_fit", lambda self: FIT)
+    mp.setattr(Runner, "tracker_decomposition", lambda self: {"before": BEFORE, "after": AFTER})
     mp.setattr(Runner, "models", lambda self, cfg, seeds, **changes: [Threshold(0.3 + 0.1 * s) for s in seeds])
     toy = {name: dataclasses.replace(runner.dataset, meta={**runner.dataset.meta, "key": f"shape-{i}"})
            for i, name in enumerate(cues.SHAPES)}  # the smoke throws under six names: no new simulation
@@ -292,6 +306,36 @@ def test_compute_reads_every_run_from_its_record_and_scores_the_models_as_observ
     assert result.n_videos == 3 and result.length_frames == runner.table1_config().n_frames(runner.fps)
     assert len(result.by_parameter) == 6 and all(result.by_parameter.values())
     assert result.drag.fall.shape == (len(runner.dataset.test),)
+
+
+def test_the_fitted_error_model_is_reported_and_is_what_observed_runs_draw(whole):
+    runner, result = whole
+    m = result.numbers.tracker_model
+    assert (m.offset.value, m.rho.value, m.flight.value, m.contact.value) == (0.006, 0.84, 0.02, 0.008)
+    assert m.offset.unit == "m" and m.videos.value == 40 and "development renders" in m.flight.what
+    assert m.white_step_sd.value == pytest.approx(np.sqrt(2) * 0.014) and m.step_sd.value == 0.0095
+    assert result.model_description == MODEL.describe() and result.white_ratio == "2.1"
+    assert (result.tracker_step_mm, result.tracker_pooled_mm, result.model_band_mm) == ("9.5", "14.0", "5")
+    glue = dict(glued(result))  # no two glued under one name
+    assert glue["model_description"] == MODEL.describe() and glue["tracker_model.offset"].endswith("]")
+    names = {name for name, _ in result.numbers.entries()}
+    assert {f"cues.tracker_model.{k}" for k in ("offset", "rho", "flight", "contact", "step_sd", "drop")} <= names
+    robust = runner.randomised_config(runner.table1_config())
+    assert (robust.observe_rho, robust.observe_offset, robust.observe_noise) == (0.84, 0.006, 0.02)
+    assert robust.observe_drop == 0.01, "validated as the fitted tracker observes"
+
+
+def test_the_tracker_before_and_after_is_reported_in_si_units_and_tabled(whole):
+    _, result = whole
+    n = result.numbers.tracker.decomposed
+    assert set(n) == {"before", "after"}
+    assert n["before"].bias.value == pytest.approx(0.015) and n["after"].bias.value == pytest.approx(0.0016)
+    assert n["after"].rho.unit == "correlation" and n["after"].velocity.value == pytest.approx(0.108)
+    assert "V ≥ 80" in n["before"].bias.what
+    names = {name for name, _ in result.numbers.entries()}
+    assert {"cues.tracker.before.bias", "cues.tracker.after.height_rms_median"} <= names
+    table = result.tracker_table.markdown()
+    assert "15.0" in table and "1.6" in table and "0.108" in table
 
 
 def test_the_tracker_error_reads_back_its_cache_file_and_gives_the_calibrated_observation():

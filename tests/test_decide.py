@@ -334,6 +334,7 @@ def test_the_camera_network_is_chosen_on_observed_validation_and_the_splits_are_
     p = runner.preset
     error = TrackerError(1.1, 0.015, 0.05, 100, 0.0138)
     monkeypatch.setattr(Runner, "tracker_error", lambda self: error)
+    monkeypatch.setattr(Runner, "observation", lambda self: error.observation())
     for inputs in ("positions", "velocity"):
         cache_records(runner, paper.grid_configs(p, "peephole", inputs), test=False)
     column = next(c for c in motion.columns(error) if c.air and c.name == "calibrated")

@@ -17,10 +17,14 @@ from study.experiments.tracker import TrackerError
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
 from study.simulate import synth
+from study.simulate.observe import Observation, TrackerNoise
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
-CAL = TrackerError(noise_px=1.02, noise_m=0.0141, drop=0.05, n_frames=100, metres_per_pixel=0.0138)
+MODEL = TrackerNoise(flight=0.02, contact=0.008, offset=0.006, rho=0.84)
+CAL = Observation(tracker=MODEL, drop=0.05)
+"""The calibrated tracker as ``Runner.observation`` gives it: the fitted error model and its lost frames."""
+WHITE = TrackerError(noise_px=1.02, noise_m=0.0141, drop=0.05, n_frames=100, metres_per_pixel=0.0138)
 
 
 def test_the_columns_come_from_the_camera_model():
@@ -30,10 +34,29 @@ def test_the_columns_come_from_the_camera_model():
     far = next(c for c in cols if c.name == "far")
     one_px = lambda d: 2 * d * math.tan(math.radians(22.5)) / 1080  # noqa: E731
     assert near.noise == pytest.approx(one_px(4.0)) and far.noise == pytest.approx(one_px(55.0))
-    assert next(c for c in cols if c.name == "calibrated").noise == CAL.noise_m
+    cal = next(c for c in cols if c.name == "calibrated")
+    assert cal.tracker == MODEL and cal.noise == pytest.approx(np.hypot(0.006, 0.02)), "its error in flight"
+    assert near.tracker is None and far.tracker is None, "the reference columns stay white"
+    assert cal.observation() == Observation(tracker=MODEL, drop=0.05) and near.observation().tracker is None
     assert all(c.drop == (0.0 if c.noise is None else CAL.drop) for c in cols), "lost frames in every observed one"
-    assert "3.1 mm" in near.label and "42.2 mm" in far.label and "1.02 px" in cols[2].label
+    assert "3.1 mm" in near.label and "42.2 mm" in far.label and "20.0 mm in flight" in cols[2].label
+    assert "autocorrelation 0.84" in cols[2].label and "offset 6.0 mm" in cols[2].label
     assert [c.key for c in cols[3:5]] == ["air_on.far", "air_off.exact"] and cols[6].heading == "air off, tracker"
+    white = motion.columns(WHITE)[2]  # a TrackerError: its white noise
+    assert white.tracker is None and white.noise == 0.0141 and "white noise of 14.1 mm" in white.label
+
+
+def test_the_calibrated_column_draws_correlated_noise_and_the_reference_columns_white():
+    from study.simulate.data import Dataset, Split
+
+    x = np.zeros((400, 60, 3))
+    x[:, :, 2] = 1.0  # in flight throughout
+    ds = Dataset(train=Split(x, np.zeros(400, int), {}), test=Split(x, np.zeros(400, int), {}), fps=30.0)
+    near, cal = motion.columns(Observation(tracker=MODEL))[1:3]
+    lag1 = lambda e: np.corrcoef(e[:, :-1].ravel(), e[:, 1:].ravel())[0, 1]  # noqa: E731
+    e_cal, e_near = cal.inputs(ds, 60)[1][:, :, 2] - 1.0, near.inputs(ds, 60)[1][:, :, 2] - 1.0
+    assert lag1(e_cal) > 0.8 and abs(lag1(e_near)) < 0.05
+    assert np.std(np.diff(e_cal, axis=1)) == pytest.approx(MODEL.step_sd(), rel=0.05)
 
 
 def test_each_network_trains_on_the_condition_it_is_tested_on():
@@ -41,8 +64,12 @@ def test_each_network_trains_on_the_condition_it_is_tested_on():
     exact, observed = motion.columns(CAL)[0], motion.columns(CAL)[2]
     assert set(motion.network_configs(base, exact)) == set(motion.NETWORKS), "no exact-trained row where all are exact"
     cfgs = motion.network_configs(base, observed)
-    assert cfgs["peephole_positions"].observe == "fixed" and cfgs["peephole_positions"].observe_noise == CAL.noise_m
-    assert cfgs["peephole_positions"].observe_drop == CAL.drop and cfgs["peephole_positions"].dims == "z"
+    c = cfgs["peephole_positions"]
+    assert c.observe == "fixed" and c.observe_noise == MODEL.flight and c.observe_rho == MODEL.rho
+    assert c.observe_offset == MODEL.offset and c.observe_contact_ratio == pytest.approx(0.4)
+    assert c.observe_drop == CAL.drop and c.dims == "z"
+    near = motion.network_configs(base, motion.columns(CAL)[1])["peephole_positions"]
+    assert (near.observe_rho, near.observe_offset, near.observe_contact_ratio) == (0.0, 0.0, 1.0), "white"
     assert cfgs["peephole_exact_trained"].observe == "exact"
     plan = motion.plan({True: "on", False: "off"}, base, motion.columns(CAL), (0, 1, 2))
     assert [r for r, _, _ in plan] == ["on"] * 4 + ["off"] * 4 and all(test for _, _, test in plan)
@@ -139,7 +166,7 @@ def m(tmp_path_factory) -> motion.Motion:
         for s in p.grid_seeds:
             labels = y if c.key == PERFECT else np.zeros_like(y)  # perfect, or every throw called light
             cache_rocket(r, "z", T, s, {"test": x_test}, {"test": labels}, None if c.noise is None else x_train)
-    return motion.compute(runner, tracker=CAL)
+    return motion.compute(runner, calibrated=CAL)
 
 
 def test_every_number_keeps_its_name_and_reads_back_from_the_results_file(m, tmp_path):
@@ -198,6 +225,7 @@ def test_the_tables_and_sentences(m):
     assert positions["air_on.near"].endswith("failed"), "an observed column's seed 1 failed to train: said there"
     assert m.motion_table.rows[-1]["air_on.exact"] == "**100.0 %**"
     assert [r["column"] for r in m.best_table.rows] == [c.heading for c in m.columns]
+    assert m.calibrated_model == MODEL.describe() and "lag-1 autocorrelation 0.84" in m.conditions
     assert "ahead of the" in m.best_table.rows[3]["lead"], "the perfect MiniRocket leads its column"
     assert len(m.seed_table.rows) == 8 * 3 + 6 + 8, "every seeded entry: networks, exact-trained, MiniRocket"
     assert m.conditions.count(";") == 3 and m.drop_pct == "5.0" and m.restitution_overlap.count("–") == 1

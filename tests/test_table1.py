@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
+
+import numpy as np
 import pytest
 
-from fake_runs import cache_records
+from fake_runs import cache_models, cache_records
 from study.book import results
 from study.experiments import Runner, paper, table1
 
@@ -12,13 +15,16 @@ pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
 
 def _score(c) -> float:
-    """Test accuracy of a fake run: X, Y, Z above Z, velocity above both; seed 1 the best on the test split."""
-    return 0.6 + 0.1 * (c.dims == "xyz") + 0.2 * (c.inputs == "velocity") + 0.15 * (c.seed == 1)
+    """Test accuracy of a fake run: X, Y, Z above Z, velocity above both, the speed network above the velocity one;
+    the rotated training throws above the plain ones; seed 1 the best on the test split."""
+    return (0.55 + 0.1 * (c.dims == "xyz") + 0.2 * (c.inputs != "positions") + 0.05 * (c.inputs == "speed")
+            + 0.04 * (c.rotate > 0) + 0.15 * (c.seed == 1))
 
 
 def _val(c) -> float:
-    """Validation accuracy: seed 0 the best there, so validation and the test split disagree on the best run."""
-    return 0.7 + 0.1 * (c.seed == 0)
+    """Validation accuracy: seed 0 the best there, so validation and the test split disagree on the best run; the
+    plateau schedule ahead of the constant rate (so the velocity rows move to it)."""
+    return 0.7 + 0.1 * (c.seed == 0) + 0.02 * (c.lr_schedule == "plateau")
 
 
 @pytest.fixture(scope="module")
@@ -29,13 +35,19 @@ def t1(tmp_path_factory) -> table1.Table1:
         cache_records(runner, paper.grid_configs(p, cell), _score, test=False, val_score=_val)
     cache_records(runner, paper.grid_configs(p, "peephole", "velocity"), _score, test=False, val_score=_val)
     g = table1.grid_search(runner)
-    cache_records(runner, [c for _, c in paper.protocol_plan(g.config, p)], _score, test=False, val_score=_val)
-    cache_records(runner, paper.seed_configs(g.config, p.seeds) + paper.seed_configs(g.velocity_config, p.seeds)
+    cache_records(runner, [c for _, c in paper.protocol_plan(g.config, p)] + paper.schedule_configs(g.velocity_config, p),
+                  _score, test=False, val_score=_val)
+    velocity = dataclasses.replace(g.velocity_config, lr_schedule="plateau")
+    speed, rot = table1.speed_config(velocity), table1.rotated_config(g.config)
+    cache_records(runner, paper.seed_configs(g.config, p.seeds) + paper.seed_configs(velocity, p.seeds)
+                  + paper.seed_configs(speed, p.seeds, ("xyz",)) + paper.seed_configs(rot, p.seeds, ("xyz",))
                   + paper.ablation_configs(g.winners, p), _score, val_score=_val)
     for s in p.data_seeds[1:]:
         o = runner.with_data_seed(s)
-        cache_records(o, paper.seed_configs(g.config, p.grid_seeds) + paper.seed_configs(g.velocity_config, p.grid_seeds),
-                      _score, val_score=_val)
+        cache_records(o, paper.seed_configs(g.config, p.grid_seeds) + paper.seed_configs(velocity, p.grid_seeds)
+                      + paper.seed_configs(speed, p.grid_seeds, ("xyz",)), _score, val_score=_val)
+    cache_models(runner, [dataclasses.replace(c, dims="xyz", seed=s) for c in (g.config, velocity, speed, rot)
+                          for s in p.seeds])  # untrained: the heading test loads them
     return table1.compute(runner)
 
 
@@ -69,10 +81,42 @@ def test_every_number_keeps_its_name_and_reads_back_from_the_results_file(t1, tm
     for key in table1.PROTOCOL_KEYS:
         assert f"table1.protocol.{key}.z.val_mean" in names and f"table1.protocol.{key}.xyz.stalled" in names
     assert {"table1.verdict", "table1.xyz_minus_z", "table1.velocity.xyz_minus_z", "table1.grid.failed_runs",
-            "table1.ablation.peephole.mean", "table1.ablation.peephole_minus_gru"} <= set(names)
+            "table1.ablation.peephole.mean", "table1.ablation.peephole_minus_gru", "table1.speed.xyz.paper_way",
+            "table1.speed.xyz_minus_z", "table1.rotated.gain", "table1.flips.speed",
+            "table1.velocity.schedule.plateau.swing"} <= set(names)
     f = tmp_path / "results.json"
     f.write_text(results.dumps(t1.numbers.entries()))
     assert table1.Numbers.read(results.load(f)) == t1.numbers
+
+
+def test_the_velocity_rows_use_the_schedule_validation_prefers(t1):
+    assert t1.schedule.chosen == "plateau", "the fake plateau runs validate 2 points higher"
+    assert t1.velocity_config.lr_schedule == "plateau" and t1.config.lr_schedule == "constant"
+    assert all(r.config.lr_schedule == "plateau" for k in ("velocity", "speed") for r in t1.seeds[k].first)
+    sched = t1.numbers.velocity.schedule
+    assert sched["plateau"].val_mean.value == pytest.approx(sched["constant"].val_mean.value + 0.02)
+    assert sched["constant"].swing.unit == "nats" and "plateau" in t1.schedule_used
+
+
+def test_a_run_s_swing_is_the_mean_epoch_to_epoch_change_of_its_second_half():
+    hist = [{"val_loss": v} for v in (0.9, 0.5, 0.3, 0.2, 1.2, 0.2)]
+    assert table1.swing(hist) == pytest.approx((1.0 + 1.0) / 2), "epochs 3..5: 0.2 -> 1.2 -> 0.2"
+    assert table1.swing(hist[:1]) == 0.0
+
+
+def test_the_heading_rows(t1):
+    """The speed network's X, Y, Z against the velocity network's Z; the rotated training throws on data set 1; the
+    answers that change when a test throw is turned (untrained models here: the speed network's cannot change)."""
+    n = t1.numbers
+    assert set(n.speed.rows) == {"xyz"} and n.speed.rows["xyz"].paper_way.verdict is None
+    assert n.speed.xyz_minus_z.value == pytest.approx(0.125), "speed X, Y, Z (0.9, 1.0) minus velocity Z (0.75, 0.9)"
+    assert n.rotated.gain.value == pytest.approx(0.04, abs=0.02) and n.rotated.gain.signed
+    assert all(r.config.rotate == table1.ROTATE and r.config.dims == "xyz" for r in t1.seeds["rotated"].first)
+    assert not t1.seeds["rotated"].others and not t1.seeds["speed"].per_data("z")[0]
+    assert n.flips["speed"].value == 0.0 and set(n.flips) == set(table1.NETWORKS)
+    assert "gains" in t1.rot_order and t1.speed_order in ("trails", "beats", "cannot be told apart from")
+    assert t1.row("speed", "xyz") is n.speed.rows["xyz"] and t1.row("rotated", "xyz") is None
+    assert len(t1.heading_table.rows) == 4 and np.isfinite(n.rotated.mean.value)
 
 
 def test_counts_and_sentences(t1):
@@ -80,4 +124,4 @@ def test_counts_and_sentences(t1):
     assert t1.numbers.grid.failed_runs.unit == "count"
     assert t1.n_params > 0 and t1.n_data == 2
     assert "X, Y, Z" in t1.clip_gain and t1.vel_order in ("trails", "beats", "cannot be told apart from")
-    assert len(t1.table1.rows) == 4 and t1.table1.markdown().count("\n") == 5
+    assert len(t1.table1.rows) == 6 and t1.table1.markdown().count("\n") == 7, "4 rows, speed and rotated X, Y, Z"

@@ -23,7 +23,7 @@ the rest of :class:`Cues` (its sentences and tables).
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import Any, Literal
@@ -38,7 +38,8 @@ from study.experiments.runner import Runner
 from study.experiments.runtable import Runs
 from study.experiments.stats import scored
 from study.experiments.text import Table, pct_ci, seeds_ci
-from study.experiments.tracker import TrackerError
+from study.experiments.tracker import LABELS, Decomposition, TrackerError
+from study.experiments.tracker_model import TrackerFit, TrackerFitNumbers
 from study.learn import baseline
 from study.learn.config import Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
@@ -81,6 +82,49 @@ class DragRuleNumbers(Reported):
 
 
 @dataclass(frozen=True)
+class DecomposedNumbers(Reported):
+    """One tracker's height error on the book's rendered throws, taken apart
+    (:class:`~study.experiments.tracker.Decomposition`)."""
+
+    bias: Number
+    offset: Number
+    noise: Number
+    rho: Number
+    flight: Number
+    contact: Number
+    velocity: Number
+    height_rms: Number
+    height_rms_median: Number
+    scale_rms_median: Number
+    lost: Number
+
+
+DECOMPOSED: dict[str, tuple[str, str, float]] = {
+    "bias": ("bias_mm", "mean error, tracked minus true, up positive", 1e-3),
+    "offset": ("offset_mm", "spread of the videos' mean errors (a per-throw offset)", 1e-3),
+    "noise": ("noise_mm", "error about each video's mean, pooled (standard deviation)", 1e-3),
+    "rho": ("rho", "lag-1 autocorrelation of that error from frame to frame", 1.0),
+    "flight": ("flight_mm", "its standard deviation in flight", 1e-3),
+    "contact": ("contact_mm", "its standard deviation while the object touches the ground", 1e-3),
+    "velocity": ("velocity_mps", "root mean square error of the frame-to-frame velocity", 1.0),
+    "height_rms": ("height_rms_mm", "end-to-end height error, root mean square", 1e-3),
+    "height_rms_median": ("height_rms_median_mm", "the same, each video's median removed", 1e-3),
+    "scale_rms_median": ("scale_rms_median_mm", "the depth-free pipeline's (one scale from the object's size at "
+                         "rest), median removed", 1e-3),
+    "lost": ("lost", "share of the frames in view the tracker lost", 1.0),
+}
+"""Each decomposed number: the :class:`~study.experiments.tracker.Decomposition` field, what it is, the factor to SI
+units (metres, m/s; a correlation and a share as they are)."""
+UNITS = {"rho": "correlation", "velocity": "m/s", "lost": "fraction"}
+
+
+def _decomposed(d: Decomposition, which: str) -> DecomposedNumbers:
+    return DecomposedNumbers(**{k: number(getattr(d, f) * scale, f"{what}, tracker with {LABELS[which]}",
+                                          unit=UNITS.get(k, "m"))
+                                for k, (f, what, scale) in DECOMPOSED.items()})
+
+
+@dataclass(frozen=True)
 class TrackerNumbers(Reported):
     """The tracker's error on rendered video (:class:`~study.experiments.tracker.TrackerError`)."""
 
@@ -88,6 +132,8 @@ class TrackerNumbers(Reported):
     """Its vertical error, metres."""
     drop: Number
     """The share of frames it lost."""
+    decomposed: dict[Literal["before", "after"], DecomposedNumbers] = named("", default_factory=dict)
+    """The tracked height's error taken apart, for the tracker with the old bounds (before) and now (after)."""
 
 
 @dataclass(frozen=True)
@@ -166,6 +212,8 @@ class Numbers(Reported):
     errors: ErrorNumbers = named("errors")
     shape: dict[str, ShapeNumbers] = named("shape")
     """Each test shape, by :func:`shape_key`."""
+    tracker_model: TrackerFitNumbers | None = None
+    """The tracker's error model fitted on development renders (``Runner.tracker_fit``): the calibrated observation."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -580,6 +628,55 @@ class Cues:
     """Rendered videos the tracker was measured on."""
     length_frames: int
     """The frames every classifier of the chapter sees (Table 1's T)."""
+    tracker_fit: TrackerFit | None = None
+    decomposed: Mapping[str, Decomposition] = field(default_factory=dict)
+    """The tracked height's error taken apart on the book's renders, before issue 28's tracker and after."""
+    """The tracker's error model fitted on development renders: the calibrated observation (``Runner.observation``)."""
+
+    # The fitted error model in the chapter's words (empty without one) ------------------------
+
+    def _fit(self, say: Callable[[TrackerFit], str]) -> str:
+        return say(self.tracker_fit) if self.tracker_fit is not None else ""
+
+    @property
+    def model_description(self) -> str:
+        """The fitted model in words, millimetres."""
+        return self._fit(lambda c: c.model.describe())
+
+    @property
+    def model_fitted_on(self) -> str:
+        """What it was fitted on."""
+        return self._fit(lambda c: c.fitted_on or f"{c.n_videos} rendered videos")
+
+    @property
+    def model_band_mm(self) -> str:
+        """How far above its rest height the exact centre counts as touching the ground, millimetres."""
+        return self._fit(lambda c: f"{1000 * c.model.band:g}")
+
+    @property
+    def tracker_step_mm(self) -> str:
+        """The tracker's frame-to-frame error, millimetres (root mean square)."""
+        return self._fit(lambda c: f"{1000 * c.step_sd:.1f}")
+
+    @property
+    def tracker_pooled_mm(self) -> str:
+        """The tracker's position error with each video's mean removed, pooled, millimetres."""
+        return self._fit(lambda c: f"{1000 * c.pooled_sd:.1f}")
+
+    @property
+    def white_step_mm(self) -> str:
+        """The frame-to-frame error white noise at that position error would have, millimetres."""
+        return self._fit(lambda c: f"{1000 * c.white_step_sd:.1f}")
+
+    @property
+    def white_ratio(self) -> str:
+        """How many times white noise overstates the tracker's frame-to-frame error."""
+        return self._fit(lambda c: f"{c.white_overstates:.1f}")
+
+    @property
+    def tracker_drop_pct(self) -> str:
+        """Share of the frames in view the tracker lost, percent."""
+        return self._fit(lambda c: f"{100 * c.drop:.1f}")
 
     # Sentences and numbers in the chapter's words ---------------------------------------------
 
@@ -597,6 +694,23 @@ class Cues:
     def noise_px(self) -> str:
         """The tracker's error, pixels."""
         return f"{self.tracker.noise_px:.2f}"
+
+    @property
+    def tracker_table(self) -> Table:
+        """The tracked height's error taken apart, with the old bounds and now, on the book's renders."""
+        if not self.decomposed:
+            return Table([], {"what": "quantity"}, empty="*Not measured in this build.*")
+        keys = [k for k in ("before", "after") if k in self.decomposed]
+
+        def cell(d: Decomposition, f: str) -> str:
+            v = getattr(d, f)
+            return f"{v:.2f}" if f == "rho" else f"{100 * v:.1f} %" if f == "lost" else \
+                f"{v:.3f}" if f == "velocity_mps" else f"{v:.1f}"
+
+        rows = [{"what": what + ("" if f in ("rho", "lost", "velocity_mps") else ", mm")
+                 + (", m/s" if f == "velocity_mps" else ""), **{k: cell(self.decomposed[k], f) for k in keys}}
+                for f, what, _ in DECOMPOSED.values()]
+        return Table(rows, {"what": "the height's error", **{k: LABELS[k] for k in keys}})
 
     @property
     def noise_mm(self) -> str:
@@ -733,15 +847,18 @@ def compute(runner: Runner, noise_mm: Sequence[float], sweeps: Mapping[str, Swee
     shapes = shape_scores(runner, cfg, cond.faithful)
     return assemble(drag, tracker, cond, (ceiling(ds), ceiling(ds, with_mass=True)),
                     exact_ceiling(prior, ("restitution", "friction")), sweeps, points, by, errors, shapes,
-                    n_videos=len(videos), length_frames=T)
+                    n_videos=len(videos), length_frames=T, tracker_fit=runner.tracker_fit(),
+                    decomposed=runner.tracker_decomposition())
 
 
 def assemble(drag: DragCue, tracker: TrackerError, cond: Conditions, fitted: tuple[Interval, Interval],
              exact: float, sweeps: Mapping[str, Sweep], points: Sequence[Point],
              by: dict[tuple[str, Dims], list[Bin]], errors: Overlap, shapes: Sequence[ShapeScore], *,
-             n_videos: int, length_frames: int) -> Cues:
+             n_videos: int, length_frames: int, tracker_fit: TrackerFit | None = None,
+             decomposed: Mapping[str, Decomposition] | None = None) -> Cues:
     """The chapter's result from its parts (what :func:`compute` measured): its numbers, verdicts and tables.
-    ``fitted``: the fitted ceiling without and with the mass (:func:`ceiling`); ``exact``: the exact one."""
+    ``fitted``: the fitted ceiling without and with the mass (:func:`ceiling`); ``exact``: the exact one;
+    ``tracker_fit``: the tracker's fitted error model (``Runner.tracker_fit``)."""
     conds, best, drag_rules = _condition_numbers(cond)
     over_rule = {d: cond.network_minus_rule(d) for d in ("xyz", "z")}
     claims = {d: verdicts.order(iv, +1) for d, iv in over_rule.items()}  # the network above the rule
@@ -751,7 +868,8 @@ def assemble(drag: DragCue, tracker: TrackerError, cond: Conditions, fitted: tup
                         {f"{mm}": number(iv, f"the drag rule with {mm} mm of tracker noise")
                          for mm, iv in drag.noisy.items()}),
         TrackerNumbers(number(tracker.noise_m, "tracker's vertical error (std after removing the offset)", unit="m"),
-                       number(tracker.drop, "share of frames the tracker lost on rendered video")),
+                       number(tracker.drop, "share of frames the tracker lost on rendered video"),
+                       {k: _decomposed(d, k) for k, d in (decomposed or {}).items()}),
         conds, best, drag_rules,
         CeilingNumbers(
             number(fitted[0], "an estimate on the test split: logistic regression on the true restitution and "
@@ -765,8 +883,9 @@ def assemble(drag: DragCue, tracker: TrackerError, cond: Conditions, fitted: tup
         _robustness_numbers(points, sweeps),
         ErrorNumbers(number(errors.inside, "Z accuracy on throws whose restitution lies where the priors overlap"),
                      number(errors.outside, "Z accuracy on the other throws")),
-        shape_numbers)
+        shape_numbers, None if tracker_fit is None else tracker_fit.numbers())
     drag_table = Table([{"noise": f"{mm} mm", "acc": pct_ci(iv)} for mm, iv in drag.noisy.items()],
                        {"noise": "tracker error (standard deviation)", "acc": "drag rule, test accuracy [95 % CI]"})
     return Cues(numbers, drag, tracker, cond, sweeps, tuple(points), by, errors, tuple(shapes), drag_table,
-                _cue_table(cond), shape_table, n_videos=n_videos, length_frames=length_frames)
+                _cue_table(cond), shape_table, n_videos=n_videos, length_frames=length_frames, tracker_fit=tracker_fit,
+                decomposed=dict(decomposed or {}))

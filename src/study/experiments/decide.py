@@ -562,7 +562,7 @@ class CameraChoice:
 def camera_network(runner: Runner) -> CameraChoice:
     """Positions or velocity for a camera: the paper's network trained and validated observed with the tracker's
     error (the motion chapter's column), chosen by its mean validation accuracy."""
-    column = next(c for c in motion.columns(runner.tracker_error()) if c.air and c.name == "calibrated")
+    column = next(c for c in motion.columns(runner.observation()) if c.air and c.name == "calibrated")
     choices: dict[Inputs, TrainConfig] = {"positions": runner.table1_config(),
                                           "velocity": runner.table1_config("velocity")}
     val: dict[Inputs, float] = {

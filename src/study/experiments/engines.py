@@ -5,13 +5,17 @@ Both data sets hold the same sampled objects and launches, index by index, witho
 Bullet as MuJoCo is checked (:func:`bullet_checks`), compares the engines throw by throw (:func:`agreement`),
 asks whether what a learner learns in one engine holds in the other (:func:`cross_entries`: every learner
 trained on one engine's training split and tested on both engines' test splits, exact and through the
-calibrated tracker), and trains Table 1's faithful row in each engine; it returns :class:`AnotherEngine`, whose
-:class:`Numbers` are what the chapter reports (``engine.table1.xyz.paper_way`` and so on).
+calibrated tracker), and trains Table 1's faithful row in each engine. It then asks whether the mass reaches a
+trajectory in either engine: the same throw simulated as a light and as a heavy object (:func:`paired_throws`), and
+the chapter's best learner trained on two classes whose only difference is the mass (:func:`mass_only_prior`,
+:func:`mass_test`). It returns :class:`AnotherEngine`, whose :class:`Numbers` are what the chapter reports
+(``engine.table1.xyz.paper_way``, ``engine.mass_only.bullet.accuracy`` and so on).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -21,7 +25,7 @@ import numpy as np
 
 from study import CLASSES
 from study.experiments import ceiling, motion, paper, stats, verdicts
-from study.experiments.reported import Number, Reported, number
+from study.experiments.reported import Number, Reported, count, number
 from study.experiments.runner import Runner
 from study.experiments.runtable import Runs
 from study.experiments.text import Table, pct, pct_ci, points, seeds_ci
@@ -29,7 +33,8 @@ from study.experiments.tracker import TrackerError
 from study.learn.config import Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.simulate import bullet, measure, observe, synth
-from study.simulate.synth import ENGINES, Engine, SynthConfig
+from study.simulate.data import Dataset
+from study.simulate.synth import ENGINES, ClassPrior, Engine, SynthConfig
 
 Learner = Literal["peephole_positions", "peephole_velocity", "minirocket", "rule"]
 """The learners of the cross-engine table (named as in ``study.experiments.motion``)."""
@@ -56,6 +61,8 @@ UNITS: dict[Feature, str] = {"bounces": "count", "time_to_rest": "s", "first_reb
 """The unit of each difference of :data:`AGREEMENT`."""
 CONDITIONS: dict[View, str] = {"exact": "exact", "calibrated": "calibrated tracker"}
 """Each view in a table's rows."""
+ENGINE_NAMES: dict[Engine, str] = {"mujoco": "MuJoCo", "bullet": "Bullet"}
+"""Each engine in a sentence."""
 
 FLIGHT_QPOS = np.array([0.0, 0.0, 13.0, 0.9, 0.1, 0.3, 0.3])
 """The free-flight check's launch: 13 m up (it never lands within the second), a unit quaternion (w, x, y, z)."""
@@ -147,7 +154,7 @@ def configs(runner: Runner) -> dict[Network, TrainConfig]:
     return {"peephole_positions": runner.table1_config(), "peephole_velocity": runner.table1_config("velocity")}
 
 
-def columns(tracker: TrackerError) -> list[motion.Column]:
+def columns(tracker: TrackerError | observe.Observation) -> list[motion.Column]:
     """The conditions of the cross-engine table: air off, exact and through the calibrated tracker."""
     return [c for c in motion.columns(tracker) if not c.air and c.name in VIEWS]
 
@@ -240,6 +247,168 @@ def outcome(diffs: Mapping[Engine, Interval], delta: float = verdicts.MARGIN.del
 
 
 # ---------------------------------------------------------------------------------------------
+# Mass alone: does the mass reach a trajectory without air?
+
+
+PAIRED_THROWS = 8
+"""Throws of the paired check (:func:`paired_throws`), each simulated as a light and as a heavy object."""
+PART = 1e-6
+"""m: the distance at which two trajectories of the same throw count as parted (a micrometre: far above MuJoCo's
+rounding, 1e-12 m, and far below anything a camera sees)."""
+FIRST_SECOND = 1.0
+"""s: the first part of the record, where the paired check also reports the largest distance."""
+CHANCE = 0.5
+"""The accuracy of a guess between two classes of equal size."""
+
+
+def shared_range(a: tuple[float, float], b: tuple[float, float]) -> tuple[float, float]:
+    """The span of two ranges: from the lower of their low ends to the higher of their high ends."""
+    return min(a[0], b[0]), max(a[1], b[1])
+
+
+def mass_only_prior(prior: SynthConfig, engine: Engine = "mujoco") -> SynthConfig:
+    """``prior``'s throws without air in ``engine``, its two classes the same but for their mass: each keeps its own
+    mass prior, both draw restitution and friction from one prior, the span of the two classes' own
+    (:func:`shared_range`), and both share the launch prior as every data set does. The Bayes rule told a throw's
+    restitution and friction is then at chance: whatever a classifier finds beyond that is the mass itself."""
+    shared = {"restitution": shared_range(prior.light.restitution, prior.heavy.restitution),
+              "friction": shared_range(prior.light.friction, prior.heavy.friction)}
+    return prior.replace(air=False, engine=engine, light=ClassPrior(prior.light.mass, **shared),
+                         heavy=ClassPrior(prior.heavy.mass, **shared))
+
+
+def mass_only_runner(runner: Runner, engine: Engine, duration: float | None = None) -> Runner:
+    """``runner`` on the mass-only data set (:func:`mass_only_prior`) of its own config and data seed, simulated by
+    ``engine`` and cached by content like every data set; each throw recorded for ``duration`` s (None: the
+    config's own; the learners' input length is all they read, and spares simulating the rest)."""
+    cfg = mass_only_prior(SynthConfig.from_dict(runner.dataset.meta["config"]), engine)
+    if duration is not None:
+        cfg = cfg.replace(duration=duration)
+    return runner.on(synth.dataset(cfg, int(runner.dataset.meta["seed"]), data_dir=runner.data_dir,
+                                   progress=runner.progress))
+
+
+def paired_masses(prior: SynthConfig) -> tuple[float, float]:
+    """The light and the heavy mass of the paired check, kg: each class prior's geometric centre (the middle of the
+    log-uniform range)."""
+    return tuple(math.sqrt(p.mass[0] * p.mass[1]) for p in (prior.light, prior.heavy))  # type: ignore[return-value]
+
+
+@dataclass(frozen=True, eq=False)
+class Paired:
+    """The same throws simulated twice in one engine, once as a light and once as a heavy object."""
+
+    engine: Engine
+    masses: tuple[float, float]
+    """The light and the heavy mass, kg."""
+    distance: np.ndarray
+    """(n, T) m: frame by frame, how far the heavy object's centre is from the light one's."""
+    fps: float
+
+    @property
+    def t(self) -> np.ndarray:
+        """(T,) s: the frame times."""
+        return np.arange(self.distance.shape[1]) / self.fps
+
+    @property
+    def max_distance(self) -> np.ndarray:
+        """(n,) m: each throw's largest distance over the whole record."""
+        return self.distance.max(axis=1)
+
+    @property
+    def first_second(self) -> np.ndarray:
+        """(n,) m: each throw's largest distance in the record's first :data:`FIRST_SECOND`."""
+        return self.distance[:, : round(FIRST_SECOND * self.fps) + 1].max(axis=1)
+
+    @property
+    def parting_time(self) -> np.ndarray:
+        """(n,) s: when each throw's two trajectories first part by more than :data:`PART` (NaN: never)."""
+        apart = self.distance > PART
+        return np.where(apart.any(axis=1), apart.argmax(axis=1) / self.fps, np.nan)
+
+
+def paired_throws(prior: SynthConfig, engine: Engine, n: int = PAIRED_THROWS, seed: int = 0) -> Paired:
+    """``n`` throws of the mass-only prior (:func:`mass_only_prior`: its light class's test throws of ``seed``,
+    restitution, friction and launch as sampled) simulated in ``engine`` at each mass of :func:`paired_masses`,
+    over ``prior``'s duration and frame rate, on one thread."""
+    cfg = mass_only_prior(prior, engine).replace(n_test=n)
+    params = synth.sample_split(cfg, seed, "test")
+    light = {k: v[params["label"] == 0] for k, v in params.items()}
+    masses = paired_masses(prior)
+    sim = synth.engine(engine)
+    x = [sim.simulate_split(cfg, {**light, "mass": np.full(n, m)}, 1, False, "paired") for m in masses]
+    return Paired(engine, masses, np.linalg.norm(x[1] - x[0], axis=2), cfg.fps)
+
+
+def best_learner(entries: Sequence[Cross], column: motion.Column) -> Learner:
+    """The chapter's best learner: of :data:`LEARNERS`, the one with the highest accuracy in ``column`` trained and
+    tested in the same engine, both engines' test throws together (ties: the first)."""
+    score = {n: np.mean([_find(entries, n, column, e, e).correct.mean() for e in ENGINES]) for n in LEARNERS}
+    return max(LEARNERS, key=lambda n: score[n])
+
+
+def mass_configs(cfgs: Mapping[Network, TrainConfig], learner: Learner, column: motion.Column,
+                 seeds: tuple[int, ...]) -> list[TrainConfig]:
+    """The runs of the mass-only test: ``learner``'s configuration in ``column`` for each seed (none for a learner
+    that is not a network)."""
+    if learner not in NETWORKS:
+        return []
+    return [dataclasses.replace(motion.trained_config(cfgs[learner], column), seed=s) for s in seeds]  # type: ignore[index]
+
+
+@dataclass(frozen=True, eq=False)
+class MassTest:
+    """One learner trained and tested in one engine on two classes whose only difference is the mass."""
+
+    engine: Engine
+    learner: Learner
+    correct: np.ndarray
+    """(S, n) bool: seed s got test throw i right (S = 1 for the rule)."""
+    seeds: tuple[int, ...]
+    failed: int = 0
+    """Seeds that failed to train (a network at chance on validation fails, as it should here)."""
+    data_key: str = ""
+
+    @cached_property
+    def interval(self) -> Interval:
+        """Mean test accuracy with its bootstrap interval over the test throws and the seeds."""
+        return bootstrap_accuracy(self.correct)
+
+    @property
+    def above_chance(self) -> Interval:
+        """The accuracy minus :data:`CHANCE`, with the same interval shifted."""
+        iv = self.interval
+        return Interval(iv.value - CHANCE, iv.lo - CHANCE, iv.hi - CHANCE, iv.method)
+
+    @property
+    def signal(self) -> bool:
+        """Whether the whole interval lies above chance: the classes are told apart by their mass."""
+        return self.interval.lo > CHANCE
+
+
+def mass_test(runner: Runner, engine: Engine, learner: Learner, cfgs: Mapping[Network, TrainConfig],
+              column: motion.Column, seeds: tuple[int, ...], contact_height: float) -> MassTest:
+    """``learner`` trained on the mass-only data set's training split (``runner`` on it: :func:`mass_only_runner`)
+    in ``column``'s condition and tested on its test split, as :func:`cross_entries` trains it."""
+    ds: Dataset = runner.dataset
+    y = np.asarray(ds.test.y)
+    T = cfgs["peephole_positions"].n_frames(ds.fps)
+    x_train, x_test = column.inputs(ds, T)
+    failed, used = 0, tuple(seeds)
+    if learner in NETWORKS:
+        runs = runner.rows(mass_configs(cfgs, learner, column, seeds), desc=f"{engine} mass only")
+        correct, failed = runs.correct(), runs.n_failed
+    elif learner == "minirocket":
+        train_x = None if column.noise is None else x_train
+        correct = np.stack([runner.rocket("z", T, s, {"test": x_test}, train_x=train_x)["test"] == y for s in seeds])
+    else:
+        rules = measure.simple_rules(observe.height_only(x_train), ds.train.y, observe.height_only(x_test), y,
+                                     ds.fps, contact_height, motion.RULE_FEATURES)
+        correct, used = measure.best_rule(rules)["correct"][None], ()
+    return MassTest(engine, learner, np.asarray(correct, bool), used, failed, ds.key)
+
+
+# ---------------------------------------------------------------------------------------------
 # What the chapter reports
 
 
@@ -251,6 +420,32 @@ class Table1Row(Reported):
     """The run validation picks (one data set: the bootstrap of that run); in Bullet, against the paper's."""
     mean: Number
     """The mean over the seeds."""
+
+
+@dataclass(frozen=True)
+class MassOnly(Reported):
+    """The mass-only test in one engine."""
+
+    accuracy: Number
+    """The chapter's best learner trained and tested on two classes whose only difference is the mass."""
+    above_chance: Number
+    """That accuracy minus one half, in points."""
+
+
+@dataclass(frozen=True)
+class PairedNumbers(Reported):
+    """The paired check in one engine: the same throws as a light and as a heavy object."""
+
+    max_distance: Number
+    """Median over the throws of each throw's largest distance over the record, m."""
+    largest: Number
+    """The largest of those, m."""
+    first_second: Number
+    """Median over the throws of the largest distance in the first second, m."""
+    parted: Number
+    """Throws whose two trajectories part by more than a micrometre within the record."""
+    parting_time: Number | None
+    """Median over those throws of the time they part, s (absent when none does)."""
 
 
 @dataclass(frozen=True)
@@ -270,6 +465,12 @@ class Numbers(Reported):
     """Table 1 in Bullet, the paper's engine."""
     table1_mujoco_air_off: dict[Dims, Table1Row]
     """Table 1 in MuJoCo on the same throws without air."""
+    mass_only: dict[Engine, MassOnly]
+    """Each engine's mass-only test (``engine.mass_only.bullet.accuracy``)."""
+    mass_only_ceiling: Number
+    """The exact ceiling of the mass-only priors (one half: the same restitution and friction)."""
+    paired: dict[Engine, PairedNumbers]
+    """Each engine's paired check (``engine.paired.bullet.max_distance``)."""
 
 
 def agreement_numbers(diff: Mapping[Feature, np.ndarray],
@@ -370,6 +571,49 @@ def table1_numbers(in_engine: Mapping[Engine, Runs]) -> tuple[dict[Engine, dict[
         "bullet": "Bullet: the same", "verdict": "paper vs Bullet"})
 
 
+def mass_numbers(tests: Mapping[Engine, MassTest]) -> tuple[dict[Engine, MassOnly], Table]:
+    """Each engine's mass-only test as numbers, and the table of them."""
+    out: dict[Engine, MassOnly] = {}
+    rows = []
+    for e, t in tests.items():
+        name = NAMES[t.learner]
+        out[e] = MassOnly(
+            number(t.interval, f"{name}, two classes that share all but the mass, air off, in {e}",
+                   learner=t.learner, seeds=list(t.seeds), failed=t.failed, data=t.data_key),
+            number(t.above_chance, f"the same minus one half (chance), in {e}", signed=True))
+        rows.append({"engine": e, "learner": name, "accuracy": seeds_ci(t.correct) + (
+            f"; {t.failed} failed" if t.failed else ""), "above": points(t.above_chance), "n": t.correct.shape[1]})
+    return out, Table(rows, {"engine": "trained and tested in", "learner": "learner (Z, exact positions)",
+                             "accuracy": "accuracy: mean [95 % CI]; t-interval; each seed (%)",
+                             "above": "above chance", "n": "test throws"})
+
+
+def paired_numbers(paired: Mapping[Engine, Paired]) -> tuple[dict[Engine, PairedNumbers], Table]:
+    """Each engine's paired check as numbers (medians over the throws, each throw's value in the source), and the
+    table of them."""
+    out: dict[Engine, PairedNumbers] = {}
+    rows = []
+    for e, p in paired.items():
+        light, heavy = p.masses
+        each = {"masses_kg": [light, heavy], "throws": [float(v) for v in p.max_distance]}
+        times = p.parting_time[np.isfinite(p.parting_time)]
+        out[e] = PairedNumbers(
+            number(float(np.median(p.max_distance)), f"{e}: median over {len(p.max_distance)} throws of how far the "
+                   f"same throw as {light:.3g} kg and as {heavy:.3g} kg parts over the record", unit="m", **each),
+            number(float(p.max_distance.max()), f"{e}: the largest of those", unit="m"),
+            number(float(np.median(p.first_second)), f"{e}: the same in the first {FIRST_SECOND:g} s", unit="m",
+                   throws=[float(v) for v in p.first_second]),
+            count(len(times), f"{e}: throws whose two trajectories part by more than {PART:g} m"),
+            number(float(np.median(times)), f"{e}: median time at which they part by more than {PART:g} m",
+                   unit="s", throws=[float(v) for v in times]) if len(times) else None)
+        rows.append({"engine": e, "median": f"{np.median(p.max_distance):.2g}", "largest": f"{p.max_distance.max():.2g}",
+                     "first": f"{np.median(p.first_second):.2g}", "parted": f"{len(times)} of {len(p.max_distance)}",
+                     "when": f"{np.median(times):.2f}" if len(times) else "—"})
+    return out, Table(rows, {"engine": "engine", "median": "farthest apart over the record, m (median)",
+                             "largest": "(largest)", "first": f"in the first {FIRST_SECOND:g} s, m (median)",
+                             "parted": f"part by over {PART * 1e6:g} µm", "when": "when, s (median)"})
+
+
 # ---------------------------------------------------------------------------------------------
 # The chapter's result
 
@@ -404,6 +648,17 @@ class AnotherEngine:
     engine_table1: Table
     n_seeds: int
     """Seeds of each cross-engine network."""
+    mass_prior: SynthConfig
+    """The mass-only test's data set config (:func:`mass_only_prior`, MuJoCo's; Bullet's differ in the engine
+    alone)."""
+    mass_learner: Learner
+    """The learner of the mass-only test: the chapter's best (:func:`best_learner`)."""
+    mass_tests: dict[Engine, MassTest]
+    """Each engine's mass-only test."""
+    paired: dict[Engine, Paired]
+    """Each engine's paired check."""
+    mass_table: Table
+    paired_table: Table
 
     @property
     def transfer_summary(self) -> str:
@@ -413,16 +668,84 @@ class AnotherEngine:
                 f"of {100 * verdicts.MARGIN.delta:g} points either way, {n['loses']} lose more than that, and for "
                 f"{n['unclear']} the intervals cannot say.")
 
+    @property
+    def mass_learner_name(self) -> str:
+        """The mass-only test's learner, in words."""
+        return NAMES[self.mass_learner]
 
-def compute(runner: Runner, tracker: TrackerError | None = None) -> AnotherEngine:
+    @property
+    def mass_setup(self) -> str:
+        """The mass-only test's two classes, in words."""
+        c = self.mass_prior
+        (r0, r1), (f0, f1) = c.light.restitution, c.light.friction
+        return (f"Both classes draw the restitution from {r0:g}–{r1:g} and the friction from {f0:g}–{f1:g}, the span "
+                f"of the light and the heavy prior, so that each class makes every kind of contact the book's throws "
+                f"make (bouncing and tumbling as well as sliding), and the launch from the study's one prior; the "
+                f"light class's mass is {c.light.mass[0]:g}–{c.light.mass[1]:g} kg and the heavy class's "
+                f"{c.heavy.mass[0]:g}–{c.heavy.mass[1]:g} kg, as in the study. Told each throw's restitution and "
+                f"friction, the Bayes rule scores {pct(self.numbers.mass_only_ceiling.value)}. Each engine simulates "
+                f"its own data set of these priors, {c.n_train} training and {c.n_test} test throws a class as the "
+                f"book's, each recorded for {c.duration:g} s, the learners' input.")
+
+    def _found(self, e: Engine) -> str:
+        t, name = self.mass_tests[e], ENGINE_NAMES[e]
+        if t.signal:
+            return f"{name}'s trajectories carry the mass, its classifier {points(t.above_chance)} above chance"
+        runs = f"{len(t.seeds)} seeds" if len(t.seeds) > 1 else "one fit"
+        return (f"the test found no mass signal in {name} at the book's scale ({t.correct.shape[1]} test throws, "
+                f"{runs}): at most {100 * (t.interval.hi - CHANCE):.1f} points above chance, at 95 %")
+
+    @property
+    def mass_summary(self) -> str:
+        """What the mass-only test found in each engine, in one sentence."""
+        acc = " and ".join(f"{pct_ci(t.interval)} in {ENGINE_NAMES[e]}" for e, t in self.mass_tests.items())
+        found = "; ".join(self._found(e) for e in self.mass_tests)
+        return (f"Trained on two classes that share everything but the mass, air off, the {NAMES[self.mass_learner]} "
+                f"scores {acc} (chance: {pct(CHANCE, 0)}): {found}.")
+
+    @property
+    def ceiling_words(self) -> str:
+        """Whether the exact ceiling of the priors bounds each engine's learners, as the mass-only test says."""
+        c = pct(self.numbers.ceiling.value)
+        carry = [ENGINE_NAMES[e] for e, t in self.mass_tests.items() if t.signal]
+        if not carry:
+            return (f"the exact ceiling of the priors, {c}, bounds the learners of both engines alike, since they "
+                    f"simulate the same draws and neither engine's mass-only test (below) found the mass in a "
+                    f"trajectory.")
+        held = [ENGINE_NAMES[e] for e, t in self.mass_tests.items() if not t.signal]
+        where = f", and bounds the learners of {' and '.join(held)}" if held else ""
+        far = "; ".join(f"in {ENGINE_NAMES[e]} {points(t.above_chance)} above chance"
+                        for e, t in self.mass_tests.items() if t.signal)
+        return (f"the exact ceiling of the priors is {c}{where}; in {' and '.join(carry)} it is not a ceiling, for "
+                f"the mass reaches the trajectories there (the mass-only test below: {far}).")
+
+    @property
+    def paired_summary(self) -> str:
+        """The paired check in one sentence."""
+        light, heavy = next(iter(self.paired.values())).masses
+        parts = []
+        for e, n in self.numbers.paired.items():
+            when = f", the median at {n.parting_time.value:.2f} s" if n.parting_time is not None else ""
+            parts.append(f"in {ENGINE_NAMES[e]}, {n.first_second.value:.2g} m apart at most within "
+                         f"{FIRST_SECOND:g} s of the launch and {n.max_distance.value:.2g} m over the record (medians; "
+                         f"the largest {n.largest.value:.2g} m), {n.parted.value:.0f} of "
+                         f"{len(self.paired[e].max_distance)} parting by more than {PART * 1e6:g} µm{when}")
+        return (f"The same {len(next(iter(self.paired.values())).max_distance)} throws simulated at {light:.3g} kg "
+                f"and at {heavy:.3g} kg: " + "; ".join(parts) + ".")
+
+
+def compute(runner: Runner, tracker: TrackerError | observe.Observation | None = None) -> AnotherEngine:
     """The chapter *Another engine* on ``runner``'s throws, without air, in each engine of ``synth.ENGINES``: every
-    network run at once, then the checks, the agreement, the cross-engine table and Table 1 in each engine.
+    network run at once, then the checks, the agreement, the cross-engine table and Table 1 in each engine; then the
+    mass-only test of the chapter's best learner in each engine (its runs asked for once that learner is known) and
+    the paired check.
 
-    ``tracker``: the tracker's error (default ``runner.tracker_error()``, measured on the rendered throws)."""
+    ``tracker``: the calibrated tracker (default ``runner.observation()``, its error model fitted on rendered
+    throws)."""
     runners = {e: runner.in_engine(e) for e in ENGINES}
     prior, p = runner.synth_config, runner.preset
     mj, bt = (runners[e].dataset for e in ENGINES)
-    cols = columns(runner.tracker_error() if tracker is None else tracker)
+    cols = columns(runner.observation() if tracker is None else tracker)
     cfgs = configs(runner)
     runner.prefetch(plan(runners, cfgs, cols, p.grid_seeds, p.seeds), desc="both engines")
     diff = agreement(mj.test.x, bt.test.x, mj.fps, prior.shape.rest_height)
@@ -436,7 +759,22 @@ def compute(runner: Runner, tracker: TrackerError | None = None) -> AnotherEngin
     table1, engine_table1 = table1_numbers(in_engine)
     exact = number(ceiling.exact_ceiling(prior, motion.AIR_OFF_PARAMETERS),
                    "exact ceiling of the priors (both engines: the same draws)")
-    numbers = Numbers(agree, cross, exact, moved, table1["bullet"], table1["mujoco"])
+    exact_col = next(c for c in cols if c.noise is None)  # a mass signal is sub-millimetre: exact positions
+    learner = best_learner(entries, exact_col)
+    length = max(c.length for c in cfgs.values())  # what the learners read of a throw, s
+    mass_runners = {e: mass_only_runner(runner, e, length) for e in ENGINES}
+    mass_cfgs = mass_configs(cfgs, learner, exact_col, p.grid_seeds)
+    if mass_cfgs:
+        runner.prefetch([(r, mass_cfgs, True) for r in mass_runners.values()], desc="mass only")
+    tests = {e: mass_test(r, e, learner, cfgs, exact_col, p.grid_seeds, prior.shape.bounding_radius)
+             for e, r in mass_runners.items()}
+    mass, mass_table = mass_numbers(tests)
+    mass_prior = SynthConfig.from_dict(mass_runners["mujoco"].dataset.meta["config"])
+    mass_ceiling = number(ceiling.exact_ceiling(mass_prior, motion.AIR_OFF_PARAMETERS),
+                          "exact ceiling of the mass-only priors (the same restitution and friction)")
+    paired = {e: paired_throws(prior, e, seed=int(runner.dataset.meta["seed"])) for e in ENGINES}
+    pairs, paired_table = paired_numbers(paired)
+    numbers = Numbers(agree, cross, exact, moved, table1["bullet"], table1["mujoco"], mass, mass_ceiling, pairs)
     return AnotherEngine(numbers, bullet.DESCRIPTION, bullet_checks(prior), diff, y, tuple(cols), cfgs, entries,
                          outcomes, in_engine, agree_table, cross_table, transfer_table, engine_table1,
-                         len(p.grid_seeds))
+                         len(p.grid_seeds), mass_prior, learner, tests, paired, mass_table, paired_table)

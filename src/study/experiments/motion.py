@@ -2,11 +2,13 @@
 ceiling of the priors.
 
 The chapter's table has a row per learner and a column per condition (:class:`Column`): the air on or off, and
-the positions exact or observed by a camera whose error is one pixel of a 1080-row camera at 4 m, the tracker's
-calibrated error, or one pixel of the same camera at 55 m (with the calibrated share of lost frames in every
-observed column). Each learner is trained on the condition it is tested on:
+the positions exact or observed by a camera whose error is white noise of one pixel of a 1080-row camera at 4 m,
+the tracker's error as its fitted model draws it (``Runner.observation``: a per-throw offset and correlated noise,
+one level in flight and another in contact, ``study.experiments.tracker_model``), or white noise of one pixel of the
+same camera at 55 m (with the tracker's share of lost frames in every observed column). Each learner is trained
+on the condition it is tested on:
 
-- the networks (:data:`NETWORKS`) with ``TrainConfig.observe = 'fixed'`` at the column's noise (a fresh draw
+- the networks (:data:`NETWORKS`) with ``TrainConfig.observe = 'fixed'`` at the column's error (a fresh draw
   every epoch; validation observed the same way), over the preset's grid seeds;
 - MiniRocket on one observed draw of the training split, once per seed;
 - the physics baseline and the best one-feature rule fitted once on that draw;
@@ -36,6 +38,7 @@ from study.experiments.text import Table, pct, pct_ci, seeds_ci
 from study.experiments.tracker import TrackerError
 from study.learn import baseline
 from study.learn.config import TrainConfig
+from study.learn.inputs import observe_fields
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.simulate import measure, observe
 from study.simulate.data import Dataset, Split
@@ -93,11 +96,14 @@ class Column:
     name: View
     """How the positions are seen."""
     noise: float | None
-    """The camera and tracker's position error, metres; None for exact positions."""
+    """The camera and tracker's position error, metres (with a tracker model, its standard deviation in flight,
+    offset included); None for exact positions."""
     drop: float = 0.0
     """The share of frames the tracker loses."""
     label: str = ""
     """What the column is, in words, for the table's header and caption."""
+    tracker: observe.TrackerNoise | None = None
+    """The tracker's error model the column draws from; None: white noise of ``noise``."""
 
     @property
     def air_key(self) -> Air:
@@ -114,7 +120,12 @@ class Column:
         return f"{'air on' if self.air else 'air off'}, {SHORT[self.name]}"
 
     def observation(self) -> observe.Observation | None:
-        return None if self.noise is None else observe.Observation(noise=self.noise, drop=self.drop)
+        """How the column observes a throw (None: exactly)."""
+        if self.noise is None:
+            return None
+        if self.tracker is not None:
+            return observe.Observation(tracker=self.tracker, drop=self.drop)
+        return observe.Observation(noise=self.noise, drop=self.drop)
 
     def inputs(self, ds: Dataset, T: int) -> tuple[np.ndarray, np.ndarray]:
         """(training, test) inputs of ``ds``'s first ``T`` frames, (n, T, 3) metres: exact, or observed with
@@ -127,20 +138,26 @@ class Column:
         return ob.observe(ds.train.x[:, :T], ds.fps, seed=salt + 50), ob.observe(ds.test.x[:, :T], ds.fps, seed=salt)
 
 
-def columns(tracker: TrackerError) -> list[Column]:
-    """The table's eight columns, from the tracker's measured error (``Runner.tracker_error``): air on and off,
-    each exact and at one pixel of a 1080-row camera at :data:`NEAR` m, at the tracker's error, and at one pixel
-    at :data:`FAR` m."""
+def columns(calibrated: observe.Observation | TrackerError) -> list[Column]:
+    """The table's eight columns: air on and off, each exact, white noise of one pixel of a 1080-row camera at
+    :data:`NEAR` m, the calibrated tracker (``Runner.observation``: its fitted error model, or the white noise a
+    ``TrackerError`` gives), and white noise of one pixel at :data:`FAR` m, every observed one losing the
+    calibrated share of frames."""
+    ob = calibrated if isinstance(calibrated, observe.Observation) else calibrated.observation()
     near = observe.Camera(distance=NEAR, rows=ROWS_1080).metres_per_pixel()
     far = observe.Camera(distance=FAR, rows=ROWS_1080).metres_per_pixel()
+    if ob.tracker is not None:
+        tracked = (ob.tracker.position_sd(), f"the calibrated tracker's fitted error ({ob.tracker.describe()})")
+    else:
+        tracked = (ob.noise, f"the calibrated tracker, white noise of {1000 * ob.noise:.1f} mm")
     views: list[tuple[View, float | None, str]] = [
         ("exact", None, "exact positions"),
         ("near", near, f"1 px of a {ROWS_1080}-row camera at {NEAR:g} m ({1000 * near:.1f} mm)"),
-        ("calibrated", tracker.noise_m,
-         f"the calibrated tracker, {tracker.noise_px:.2f} px at 4 m ({1000 * tracker.noise_m:.1f} mm)"),
+        ("calibrated", *tracked),
         ("far", far, f"1 px of a {ROWS_1080}-row camera at {FAR:g} m ({1000 * far:.1f} mm)")]
-    return [Column(air, name, noise, 0.0 if noise is None else tracker.drop, label) for air in (True, False)
-            for name, noise, label in views]
+    return [Column(air, name, noise, 0.0 if noise is None else ob.drop, label,
+                   ob.tracker if name == "calibrated" else None)
+            for air in (True, False) for name, noise, label in views]
 
 
 def column_ceiling(cfg: SynthConfig, column: Column) -> float:
@@ -164,9 +181,10 @@ def configs(runner: Runner) -> dict[Trained, TrainConfig]:
 
 def trained_config(cfg: TrainConfig, column: Column) -> TrainConfig:
     """``cfg`` trained on the column's condition: exact, or observed with its noise and lost frames."""
-    if column.noise is None:
+    ob = column.observation()
+    if ob is None:
         return dataclasses.replace(cfg, dims="z")
-    return dataclasses.replace(cfg, dims="z", observe="fixed", observe_noise=column.noise, observe_drop=column.drop)
+    return dataclasses.replace(cfg, dims="z", observe="fixed", **observe_fields(ob))
 
 
 def network_configs(cfgs: Mapping[Trained, TrainConfig], column: Column) -> dict[Trained, TrainConfig]:
@@ -424,6 +442,8 @@ class Motion:
     """Network runs of the chapter."""
     n_failed: int
     """Of those, runs that failed to train."""
+    fitted_on: str = ""
+    """What the calibrated column's error model was fitted on, in words (``Runner.tracker_fit``)."""
 
     def curve(self, learner: Learner, air: bool) -> tuple[np.ndarray, list[Interval]]:
         """One learner's accuracy against the camera's error at one air setting: (k,) errors in millimetres (0
@@ -436,6 +456,12 @@ class Motion:
         return self.ceilings["air_on.exact" if air else "air_off.exact"]
 
     # Sentences whose words depend on the numbers -------------------------------------------------
+
+    @property
+    def calibrated_model(self) -> str:
+        """The calibrated column's error model in words (white noise where it has none)."""
+        c = next(c for c in self.columns if c.name == "calibrated")
+        return c.tracker.describe() if c.tracker is not None else f"white noise of {1000 * (c.noise or 0):.1f} mm"
 
     @property
     def vel_point(self) -> str:
@@ -527,9 +553,10 @@ def _gap_table(entries: Mapping[tuple[Learner, str], Entry], cols: Sequence[Colu
 
 
 def report(prior: SynthConfig, cfgs: Mapping[Trained, TrainConfig], cols: Sequence[Column],
-           entries: Mapping[tuple[Learner, str], Entry], drop: float) -> Motion:
+           entries: Mapping[tuple[Learner, str], Entry], drop: float, fitted_on: str = "") -> Motion:
     """The chapter's result from its entries (``entries[learner, column.key]``, from :func:`column_entries`):
-    numbers, tables and sentences. ``drop``: the share of frames the tracker loses."""
+    numbers, tables and sentences. ``drop``: the share of frames the tracker loses; ``fitted_on``: what the
+    calibrated column's error model was fitted on."""
     entries = dict(entries)
     ceilings = {c.key: column_ceiling(prior, c) for c in cols}
     leads = {c.key: best_of([entries[n, c.key] for n in LEARNERS if (n, c.key) in entries]) for c in cols}
@@ -550,22 +577,23 @@ def report(prior: SynthConfig, cfgs: Mapping[Trained, TrainConfig], cols: Sequen
         _seed_table(entries, cols), _best_table(leads, entries, cols, ceilings), _gap_table(entries, cols, ceilings, heads),
         conditions="; ".join(c.label for c in cols if c.air), drop_pct=f"{100 * drop:.1f}",
         restitution_overlap=f"{max(light[0], heavy[0]):g}–{min(light[1], heavy[1]):g}", length_s=length,
-        n_runs=sum(e.correct.shape[0] for e in nets), n_failed=n_failed)
+        n_runs=sum(e.correct.shape[0] for e in nets), n_failed=n_failed, fitted_on=fitted_on)
 
 
 def compute(runner: Runner, cfgs: Mapping[Trained, TrainConfig] | None = None,
-            tracker: TrackerError | None = None) -> Motion:
+            calibrated: observe.Observation | None = None) -> Motion:
     """The chapter *What the motion allows* on ``runner``'s data (air on) and the same throws without air: every
     network run at once (so every core stays busy), then every entry of the table and the result.
 
-    ``cfgs``: each network row's configuration (default :func:`configs`); ``tracker``: the tracker's error
-    (default ``runner.tracker_error()``, measured on the rendered throws)."""
+    ``cfgs``: each network row's configuration (default :func:`configs`); ``calibrated``: the calibrated tracker's
+    observation (default ``runner.observation()``, the error model fitted on rendered throws)."""
     cfgs = configs(runner) if cfgs is None else cfgs
-    tracker = runner.tracker_error() if tracker is None else tracker
-    cols = columns(tracker)
+    fitted_on = runner.tracker_fit().fitted_on if calibrated is None else ""
+    calibrated = runner.observation() if calibrated is None else calibrated
+    cols = columns(calibrated)
     on = {True: runner, False: runner.air_off()}
     seeds = runner.preset.grid_seeds
     runner.prefetch(plan(on, cfgs, cols, seeds), desc="every network")
     contact = runner.synth_config.shape.bounding_radius
     entries = {(e.learner, c.key): e for c in cols for e in column_entries(on[c.air], cfgs, c, seeds, contact)}
-    return report(runner.synth_config, cfgs, cols, entries, tracker.drop)
+    return report(runner.synth_config, cfgs, cols, entries, calibrated.drop, fitted_on)

@@ -9,8 +9,13 @@
    validation picks on each of the preset's data sets (the paper's statistic, computed fairly), the mean of the
    first data set's seeds, the mean over data sets and seeds, and the share of variance between data sets;
    the verdicts against the paper's 81 % and 78 % and its claim that X, Y, Z does better;
-4. the ablation of the peepholes (each cell at its own grid winner);
-5. a physics baseline without learning.
+4. the heading: every throw starts at x = y = 0 with its heading uniform on the circle, so the signed horizontal
+   channels carry it and no class. The same network fed what of the motion does not turn with the heading (the
+   height, its velocity, the horizontal speed: ``inputs='speed'``), the paper's network trained on throws turned
+   about the vertical (``TrainConfig.rotate``), and how many answers of each change when a test throw is turned
+   (:class:`Heading`); the velocity network's learning-rate schedule, chosen on validation (:class:`ScheduleChoice`);
+5. the ablation of the peepholes (each cell at its own grid winner);
+6. a physics baseline without learning.
 
 :class:`Numbers` is what the chapter reports, under the names ``table1.xyz.paper_way`` and so on; the page
 glues the rest of :class:`Table1` (its sentences and tables) with ``study.book.publish``.
@@ -27,17 +32,31 @@ import numpy as np
 from study.experiments import paper, stats, verdicts
 from study.experiments.reported import Number, Reported, Verdict, count, named, number
 from study.experiments.runner import Runner
-from study.experiments.runtable import Fitted, Runs
+from study.experiments.runtable import Fitted, Run, Runs
 from study.experiments.text import Table, pct, pct_ci, pct_pm, points, runs_note, seeds_ci
-from study.learn.config import Cell, Dims, Inputs, TrainConfig
+from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
+from study.learn.inputs import rotated
 from study.learn.metrics import (PLATEAU_LOSS, Interval, between_share, bootstrap_accuracy, bootstrap_difference,
                                  hierarchical_bootstrap, t_interval)
 
 CELL_NAMES: dict[Cell, str] = {"peephole": "peephole LSTM (paper)", "no-peephole": "LSTM, peepholes fixed at 0",
                                "torch-lstm": "LSTM (torch.nn.LSTM)", "gru": "GRU"}
 """Each cell in words."""
-INPUT_NAMES: dict[Inputs, str] = {"positions": "positions (the paper's)", "velocity": "with velocity (beyond the paper)"}
+INPUT_NAMES: dict[Inputs, str] = {"positions": "positions (the paper's)", "velocity": "with velocity (beyond the paper)",
+                                   "speed": "height, its velocity, horizontal speed (beyond the paper)"}
 """What the network reads, in words."""
+Network = Literal["positions", "velocity", "speed", "rotated"]
+"""Table 1's networks: the paper's on positions; fed velocity; fed what does not turn with the heading ('speed'); the
+paper's on positions, trained on throws turned about the vertical."""
+NETWORKS: tuple[Network, ...] = ("positions", "velocity", "speed", "rotated")
+NETWORK_NAMES: dict[Network, str] = {**INPUT_NAMES, "rotated": "positions, trained on turned throws (beyond the paper)"}
+"""Each network in words."""
+SCHEDULE_NAMES: dict[Schedule, str] = {"constant": "constant (the study's protocol)", "plateau": "halved on plateaus"}
+"""Each learning-rate schedule in words."""
+ROTATE = 180.0
+"""The augmentation's range, degrees: any heading, as the throws are launched."""
+TURN_SEED = 28
+"""Seed of the angles the test throws are turned by (:func:`heading_flips`)."""
 ProtocolKey = Literal["first", "forget_bias", "min_epochs", "clipping", "plateau"]
 PROTOCOL_KEYS: tuple[ProtocolKey, ...] = ("first", "forget_bias", "min_epochs", "clipping", "plateau")
 """The results file's name of each protocol of ``paper.PROTOCOLS``, in order."""
@@ -71,12 +90,50 @@ class Row(Reported):
 
 
 @dataclass(frozen=True)
+class ScheduleRow(Reported):
+    """The velocity network at its grid point with one learning-rate schedule, on Z, the grid's seeds, validation."""
+
+    val_mean: Number
+    """Mean validation accuracy at the kept epoch over the seeds."""
+    swing: Number
+    """How far the validation loss moves from one epoch to the next: the mean absolute change over the second half
+    of a run's epochs, nats, mean over the seeds."""
+
+
+@dataclass(frozen=True)
 class Velocity(Reported):
     """Table 1 for the paper's network fed its velocity (beyond the paper)."""
 
     rows: dict[Dims, Row] = named("")
     xyz_minus_z: Number = named("xyz_minus_z")
     """X, Y, Z minus Z, mean over seeds (paired bootstrap)."""
+    schedule: dict[Schedule, ScheduleRow] = named("schedule")
+    """Each learning-rate schedule at the velocity network's point; the rows use the one validation prefers."""
+
+
+@dataclass(frozen=True)
+class Speed(Reported):
+    """The same network fed the height, its velocity and the horizontal speed (``inputs='speed'``): nothing that
+    turns with the throw's heading. Its X, Y, Z row only: on Z alone its channels are the velocity network's."""
+
+    rows: dict[Dims, Row] = named("")
+    xyz_minus_z: Number = named("xyz_minus_z")
+    """Its X, Y, Z minus the velocity network's Z, mean over seeds (paired bootstrap): the paper's claim when the
+    heading cannot be memorised."""
+
+
+@dataclass(frozen=True)
+class Rotated(Reported):
+    """The paper's network on X, Y, Z positions, its training throws turned about the vertical every epoch."""
+
+    mean: Number
+    """Mean test accuracy of Table 1's seeds, data set 1."""
+    gain: Number
+    """Minus the paper's network on X, Y, Z without the rotations, the same seeds (paired bootstrap)."""
+    xyz_minus_z: Number
+    """Minus the paper's network on Z, the same seeds (paired bootstrap)."""
+    failed: Number
+    """Runs that failed to train."""
 
 
 @dataclass(frozen=True)
@@ -127,6 +184,11 @@ class Numbers(Reported):
     """Table 1 over both inputs: the paper's best against the run validation picks."""
     xyz_minus_z: Number = named("xyz_minus_z")
     """X, Y, Z minus Z (positions), mean over seeds, with the verdict on the paper's claim that X, Y, Z is better."""
+    speed: Speed = named("speed")
+    rotated: Rotated = named("rotated")
+    flips: dict[Network, Number] = named("flips")
+    """Share of the test throws whose answer changes when the throw is turned about the vertical by a random angle,
+    each X, Y, Z network, Table 1's seeds, data set 1."""
     ablation: Ablation = named("ablation")
     baseline: dict[Dims, Number] = named("baseline")
     """The physics baseline's test accuracy."""
@@ -165,16 +227,72 @@ def grid_search(runner: Runner) -> GridSearch:
                       runner.table1_config("velocity"))
 
 
+def rotated_config(cfg: TrainConfig) -> TrainConfig:
+    """``cfg`` (the paper's network on positions) on X, Y, Z, its training throws turned by any angle every epoch."""
+    return dataclasses.replace(cfg, dims="xyz", rotate=ROTATE)
+
+
 def prefetch(runner: Runner, g: GridSearch) -> None:
-    """Every other run of the chapter at once: the protocols, Table 1 on every data set, the ablation."""
+    """Every run of the chapter that does not wait for a choice at once: the protocols, the paper's network on
+    every data set, the ablation, the rotated training throws, the velocity network's schedules."""
     p = runner.preset
     runner.prefetch([(runner, [c for _, c in paper.protocol_plan(g.config, p)], False),
-                     (runner, paper.seed_configs(g.config, p.seeds) + paper.seed_configs(g.velocity_config, p.seeds),
-                      True),
+                     (runner, paper.schedule_configs(g.velocity_config, p), False),
+                     (runner, paper.seed_configs(g.config, p.seeds) + paper.seed_configs(rotated_config(g.config),
+                                                                                          p.seeds, ("xyz",)), True),
                      (runner, paper.ablation_configs(g.winners, p), True)]
-                    + [(o, paper.seed_configs(g.config, p.grid_seeds) + paper.seed_configs(g.velocity_config, p.grid_seeds),
-                        True) for o in (runner.with_data_seed(s) for s in p.data_seeds[1:])],
+                    + [(o, paper.seed_configs(g.config, p.grid_seeds), True)
+                       for o in (runner.with_data_seed(s) for s in p.data_seeds[1:])],
                     desc="Table 1, protocols, ablation")
+
+
+def speed_config(cfg: TrainConfig) -> TrainConfig:
+    """``cfg`` (the velocity network) fed the height, its velocity and the horizontal speed instead."""
+    return dataclasses.replace(cfg, inputs="speed")
+
+
+def prefetch_velocity(runner: Runner, velocity: TrainConfig) -> None:
+    """The velocity network's Table 1 (at its chosen schedule) and the speed network's X, Y, Z, every data set."""
+    p = runner.preset
+    speed = speed_config(velocity)
+    runner.prefetch([(runner, paper.seed_configs(velocity, p.seeds) + paper.seed_configs(speed, p.seeds, ("xyz",)),
+                      True)]
+                    + [(o, paper.seed_configs(velocity, p.grid_seeds) + paper.seed_configs(speed, p.grid_seeds, ("xyz",)),
+                        True) for o in (runner.with_data_seed(s) for s in p.data_seeds[1:])],
+                    desc="Table 1 with velocity")
+
+
+@dataclass(frozen=True)
+class ScheduleChoice:
+    """The velocity network's learning-rate schedule, chosen on validation (``paper.best_schedule``)."""
+
+    runs: Runs
+    """Its grid point with each schedule, on Z, the grid's seeds (validation only)."""
+    swings: dict[Schedule, np.ndarray]
+    """Each schedule's per-seed swing of the validation loss (:func:`swing`), nats."""
+    chosen: Schedule
+    """What the velocity rows use."""
+    config: TrainConfig
+    """The velocity network with it."""
+
+
+def swing(history: list[dict[str, float]]) -> float:
+    """How far a run's validation loss moves from one epoch to the next: the mean absolute change over the second
+    half of its epochs (the first half holds the descent every run makes), nats; 0 for a run of one epoch."""
+    loss = np.asarray([e["val_loss"] for e in history], dtype=float)
+    tail = loss[len(loss) // 2 :] if len(loss) > 2 else loss
+    return float(np.mean(np.abs(np.diff(tail)))) if len(tail) > 1 else 0.0
+
+
+def schedule_choice(runner: Runner, g: GridSearch) -> ScheduleChoice:
+    """The velocity network's point with each schedule on validation, and the one the velocity rows use."""
+    cfgs = paper.schedule_configs(g.velocity_config, runner.preset)
+    records = runner.runs(cfgs, test=False, desc="schedules")
+    runs = Runs(Run.from_record(r, runner.dataset.test.y) for r in records)
+    swings = {k: np.asarray([swing(r["history"]) for r, c in zip(records, cfgs) if c.lr_schedule == k])
+              for k in paper.SCHEDULES}
+    chosen = paper.best_schedule(runs)
+    return ScheduleChoice(runs, swings, chosen, dataclasses.replace(g.velocity_config, lr_schedule=chosen))
 
 
 @dataclass(frozen=True)
@@ -191,12 +309,26 @@ class Seeds:
         return [self.first.where(dims=dims)] + [o.where(dims=dims) for o in self.others]
 
 
-def seed_runs(runner: Runner, cfg: TrainConfig) -> Seeds:
-    """Table 1's runs of ``cfg`` on the first data set (Table 1's seeds) and the others (the grid's seeds)."""
+def seed_runs(runner: Runner, cfg: TrainConfig, dims: tuple[Dims, ...] = paper.BOTH, every_data: bool = True) -> Seeds:
+    """Table 1's runs of ``cfg`` for ``dims`` on the first data set (Table 1's seeds) and, if ``every_data``, the
+    others (the grid's seeds)."""
     p = runner.preset
-    others = [runner.with_data_seed(s) for s in p.data_seeds[1:]]  # other throws, same priors
-    return Seeds(runner.seed_runs(cfg), tuple(o.train_runs(cfg, paper.BOTH, p.grid_seeds, desc=f"data set {i + 2}")
-                                              for i, o in enumerate(others)))
+    others = [runner.with_data_seed(s) for s in p.data_seeds[1:]] if every_data else []  # other throws, same priors
+    return Seeds(runner.train_runs(cfg, dims, p.seeds, desc="Table 1"),
+                 tuple(o.train_runs(cfg, dims, p.grid_seeds, desc=f"data set {i + 2}") for i, o in enumerate(others)))
+
+
+def heading_flips(runner: Runner, cfgs: dict[Network, TrainConfig]) -> dict[Network, np.ndarray]:
+    """For each X, Y, Z network of ``cfgs``: (S, n) bool, whether Table 1's seed s answers test throw i otherwise
+    once the throw is turned about the vertical through its launch point by an angle uniform on the circle (one
+    seeded angle per throw, :data:`TURN_SEED`, the same for every network)."""
+    x = runner.dataset.test.x
+    turned = rotated(x, np.random.default_rng(TURN_SEED).uniform(-180.0, 180.0, len(x)))
+    out = {}
+    for k, cfg in cfgs.items():
+        models = runner.models(dataclasses.replace(cfg, dims="xyz"), runner.preset.seeds)
+        out[k] = np.stack([m.predict_proba(x).argmax(1) != m.predict_proba(turned).argmax(1) for m in models])
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -212,10 +344,15 @@ class Table1:
     config: TrainConfig
     """Table 1's configuration: the paper's network at its grid's best point."""
     velocity_config: TrainConfig
-    """The network fed velocity at its own grid's best point."""
-    seeds: dict[Inputs, Seeds]
-    """Table 1's runs for each network (the figure draws every one)."""
-    picked: dict[tuple[Inputs, Dims], tuple[int, ...]]
+    """The network fed velocity at its own grid's best point, with the schedule validation chose
+    (:attr:`schedule`)."""
+    schedule: ScheduleChoice
+    """The velocity network's learning-rate schedule, chosen on validation."""
+    seeds: dict[Network, Seeds]
+    """Table 1's runs for each network (the figure draws every one): both inputs on every data set for the paper's
+    network and the velocity network; X, Y, Z only for the speed network (every data set) and the rotated one (data
+    set 1)."""
+    picked: dict[tuple[Network, Dims], tuple[int, ...]]
     """The seed validation picks on each data set, per row."""
     grid_table: Table
     """Every grid point of every cell, scored over seeds."""
@@ -279,6 +416,19 @@ class Table1:
     """Of those, runs that failed to train."""
     shares: tuple[str, ...]
     """Each row's variance between data sets, as shown."""
+    speed_xyz_accuracies: tuple[float, ...]
+    """The speed network's seeds on X, Y, Z (data set 1)."""
+    heading_table: Table
+    """What turning a throw about the vertical does to each X, Y, Z network."""
+    schedule_table: Table
+    """The velocity network's schedules on validation."""
+
+    def row(self, network: Network, dims: Dims) -> Row | None:
+        """The reported row of ``network`` on ``dims`` (None where the chapter has none: the rotated network's, and
+        the speed network's Z, which is the velocity network's)."""
+        n = self.numbers
+        rows = {"positions": n.rows, "velocity": n.velocity.rows, "speed": n.speed.rows}.get(network, {})
+        return rows.get(dims)  # type: ignore[attr-defined]
 
     # Sentences whose words depend on the numbers -------------------------------------------------
 
@@ -364,11 +514,46 @@ class Table1:
         return f"{min(a):.1f} and {max(a):.1f} %"
 
     @property
+    def speed_xyz_range(self) -> str:
+        a = [100 * x for x in self.speed_xyz_accuracies]
+        return f"{min(a):.1f} and {max(a):.1f} %"
+
+    @property
     def vel_runs_note(self) -> str:
         if self.vel_failed_xyz == 0:
             return ("none of them failed to train, so the gap is not runs stuck at chance but a solution the layer "
                     "settles on when it also reads the horizontal channels")
         return f"{self.vel_failed_xyz} of them failed to train (counted in the mean, not removed)"
+
+    @property
+    def speed_order(self) -> str:
+        d = self.numbers.speed.xyz_minus_z
+        return "trails" if d.hi < 0 else "beats" if d.lo > 0 else "cannot be told apart from"
+
+    @property
+    def rot_order(self) -> str:
+        d = self.numbers.rotated.gain
+        return ("gains" if d.lo > 0 else "loses" if d.hi < 0 else
+                "neither gains nor loses measurably (the interval spans 0)")
+
+    @property
+    def rot_z_order(self) -> str:
+        d = self.numbers.rotated.xyz_minus_z
+        return "above" if d.lo > 0 else "below" if d.hi < 0 else "not distinguishable from"
+
+    @property
+    def schedule_used(self) -> str:
+        if self.schedule.chosen == "constant":
+            return ("validation prefers the constant rate, so the velocity rows keep it (the study's protocol)")
+        return (f"validation prefers halving the rate on plateaus, so every velocity row below (and the speed "
+                f"network's) trains with it ({self.schedule.chosen!r}); the positions rows keep the study's "
+                "protocol, as the protocols' comparison above chose")
+
+    @property
+    def schedule_steadies(self) -> str:
+        sw = self.numbers.velocity.schedule
+        return ("halving the rate on plateaus steadies it" if sw["plateau"].swing.value < sw["constant"].swing.value
+                else "halving the rate on plateaus does not steady it")
 
     @property
     def share_range(self) -> str:
@@ -518,6 +703,58 @@ def _baseline(base: dict[Dims, Fitted], positions: Runs) -> tuple[dict[Dims, Num
     return accs, minus, table, beats
 
 
+def _schedule(choice: ScheduleChoice) -> tuple[dict[Schedule, ScheduleRow], Table]:
+    numbers, rows = {}, []
+    for k in paper.SCHEDULES:
+        runs = choice.runs.where(lr_schedule=k)
+        val, sw = runs.val_accuracies(), choice.swings[k]
+        numbers[k] = ScheduleRow(number(float(val.mean()), f"velocity network, Z, {k} learning rate: mean validation "
+                                        "accuracy over the grid's seeds", seeds=[r.seed for r in runs]),
+                                 number(float(sw.mean()), f"velocity network, Z, {k} learning rate: mean absolute "
+                                        "epoch-to-epoch change of the validation loss, second half of the epochs",
+                                        unit="nats", per_seed=sw.tolist()))
+        rows.append({"schedule": SCHEDULE_NAMES[k], "val": pct_pm(float(val.mean()), float(val.std(ddof=1)) if len(val) > 1 else 0.0),
+                     "swing": ", ".join(f"{x:.3f}" for x in sw), "epochs": float(np.mean(runs.values("epochs"))),
+                     "chosen": "✓" if k == choice.chosen else ""})
+    table = Table(rows, {"schedule": "learning rate", "val": "validation accuracy, mean ± std",
+                         "swing": "swing of the validation loss, each seed (nats)", "epochs": "epochs (mean)",
+                         "chosen": "chosen"}, {"epochs": ".0f"})
+    return numbers, table
+
+
+def _rotated(rot: Runs, positions: Runs) -> tuple[Rotated, dict, dict]:
+    summ = stats.summary(rot)
+    gain = bootstrap_difference(rot.correct(), positions.where(dims="xyz").correct())
+    minus_z = bootstrap_difference(rot.correct(), positions.where(dims="z").correct())
+    where = "X, Y, Z, positions, training throws turned about the vertical"
+    numbers = Rotated(
+        number(summ.interval, f"mean test accuracy over {summ.n} seeds, {where}", per_seed=[r.accuracy for r in rot],
+               config=dataclasses.asdict(rot[0].config)),
+        number(gain, "turned training throws minus the paper's network, X, Y, Z, mean over seeds", signed=True),
+        number(minus_z, "turned training throws (X, Y, Z) minus the paper's network on Z only", signed=True),
+        count(summ.failed, "runs that failed to train"))
+    name = NETWORK_NAMES["rotated"]
+    table = {"inputs": name, "dims": paper.DIMS_NAMES["xyz"], "paper": "—", "paper_way": "— (data set 1 only)",
+             "picked": "—", "mean": pct_ci(summ.interval), "verdict": "(beyond the paper)"}
+    spread = {"inputs": name, "dims": paper.DIMS_NAMES["xyz"],
+              "seeds": ", ".join(f"{100 * r.accuracy:.1f}" for r in rot),  # type: ignore[operator]
+              "t": pct_ci(t_interval(rot.accuracies())), "across": "— (data set 1 only)", "share": "—",
+              "runs": runs_note(summ) or "all trained"}
+    return numbers, table, spread
+
+
+def _heading(flips: dict[Network, np.ndarray], seeds: dict[Network, Seeds]) -> tuple[dict[Network, Number], Table]:
+    numbers, rows = {}, []
+    for k, changed in flips.items():
+        iv = bootstrap_accuracy(changed)
+        numbers[k] = number(iv, f"share of test answers that change when the throw is turned about the vertical, "
+                                f"{NETWORK_NAMES[k]}, X, Y, Z", per_seed=changed.mean(axis=1).tolist())
+        rows.append({"network": NETWORK_NAMES[k], "flips": pct_ci(iv),
+                     "mean": pct_ci(stats.summary(seeds[k].first.where(dims="xyz")).interval)})
+    return numbers, Table(rows, {"network": "X, Y, Z network", "flips": "answers changed by turning the throw [95 % CI]",
+                                 "mean": "its test accuracy, mean of seeds [95 % CI]"})
+
+
 def compute(runner: Runner) -> Table1:
     """The chapter *Table 1* on ``runner``'s preset and data set: every run of it, cached."""
     from study.learn.model import Classifier  # torch: the network's size
@@ -525,18 +762,33 @@ def compute(runner: Runner) -> Table1:
     p, ds = runner.preset, runner.dataset
     g = grid_search(runner)
     prefetch(runner, g)
+    choice = schedule_choice(runner, g)
+    velocity = choice.config
+    prefetch_velocity(runner, velocity)
     grid_table, grid_failed, grid_runs = _grid_table(g, p)
     protocol_numbers, protocol_table, facts = _protocols(runner.protocol_runs(g.config))
-    seeds = {"positions": seed_runs(runner, g.config), "velocity": seed_runs(runner, g.velocity_config)}
-    rows: dict[Inputs, dict[Dims, Row]] = {"positions": {}, "velocity": {}}
+    cfgs: dict[Network, TrainConfig] = {"positions": g.config, "velocity": velocity, "speed": speed_config(velocity),
+                                        "rotated": rotated_config(g.config)}
+    seeds: dict[Network, Seeds] = {"positions": seed_runs(runner, g.config), "velocity": seed_runs(runner, velocity),
+                                   "speed": seed_runs(runner, cfgs["speed"], ("xyz",)),
+                                   "rotated": seed_runs(runner, cfgs["rotated"], ("xyz",), every_data=False)}
+    rows: dict[Inputs, dict[Dims, Row]] = {"positions": {}, "velocity": {}, "speed": {}}
     table, spread, picked = [], [], {}
-    for inputs, cfg in (("positions", g.config), ("velocity", g.velocity_config)):
-        for d in ORDER:
-            rows[inputs][d], t_row, s_row, picked[inputs, d] = _row(runner, inputs, cfg, seeds[inputs], d)
+    for inputs, dims in (("positions", ORDER), ("velocity", ORDER), ("speed", ("xyz",))):
+        for d in dims:
+            rows[inputs][d], t_row, s_row, picked[inputs, d] = _row(runner, inputs, cfgs[inputs], seeds[inputs], d)
             table.append(t_row)
             spread.append(s_row)
-    diffs = {k: bootstrap_difference(s.first.where(dims="xyz").correct(), s.first.where(dims="z").correct())
-             for k, s in seeds.items()}  # X, Y, Z minus Z, paired on the test throws, for each input
+    first = {k: s.first for k, s in seeds.items()}
+    diffs = {k: bootstrap_difference(first[k].where(dims="xyz").correct(), first[k].where(dims="z").correct())
+             for k in ("positions", "velocity")}  # X, Y, Z minus Z, paired on the test throws, for each input
+    diffs["speed"] = bootstrap_difference(first["speed"].correct(), first["velocity"].where(dims="z").correct())
+    rotated_numbers, t_row, s_row = _rotated(first["rotated"], first["positions"])
+    table.append(t_row)
+    spread.append(s_row)
+    picked["rotated", "xyz"] = tuple(r.seed for r in stats.validation_pick([first["rotated"]]).picked)
+    flips, heading_table = _heading(heading_flips(runner, cfgs), seeds)
+    schedule_numbers, schedule_table = _schedule(choice)
     positions = rows["positions"]
     overall = verdicts.combined([positions[d].paper_way.decision for d in ORDER])  # type: ignore[misc]
     ablation, ablation_table, abl_diffs = _ablation(runner, g.winners)
@@ -544,14 +796,16 @@ def compute(runner: Runner) -> Table1:
     numbers = Numbers(
         GridNumbers(count(grid_failed, "grid runs that failed to train (all cells)")), protocol_numbers, positions,
         Velocity(rows["velocity"], number(diffs["velocity"], "with velocity: X, Y, Z minus Z only, mean over seeds",
-                                          signed=True)),
+                                          signed=True), schedule_numbers),
         Verdict(overall, "Table 1, both inputs: the paper's best against the run validation picks"),
         number(diffs["positions"], "X, Y, Z minus Z only, mean over seeds", decision=verdicts.order(diffs["positions"], +1),
                signed=True),
-        ablation, base_acc, base_minus)
-    vel_xyz = seeds["velocity"].first.where(dims="xyz")
+        Speed(rows["speed"], number(diffs["speed"], "height, its velocity and the horizontal speed from X, Y, Z minus "
+                                    "the velocity network on Z only, mean over seeds", signed=True)),
+        rotated_numbers, flips, ablation, base_acc, base_minus)
+    vel_xyz = first["velocity"].where(dims="xyz")
     return Table1(
-        numbers, g.config, g.velocity_config, seeds, picked, grid_table, protocol_table,
+        numbers, g.config, velocity, choice, seeds, picked, grid_table, protocol_table,
         Table(table, {"inputs": "the network reads", "dims": "trajectory dimension(s)", "paper": "paper, best",
                       "paper_way": "ours, the run validation picks [95 % CI]", "picked": "that run, per data set (%)",
                       "mean": f"ours, mean of {len(p.seeds)} seeds, data set 1 [95 % CI]", "verdict": "verdict"}),
@@ -566,4 +820,6 @@ def compute(runner: Runner) -> Table1:
         grid_runs=grid_runs, lstm_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("peephole")),
         gru_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("gru")), defaults_moved=paper.differs_from_defaults(g.config, p),
         abl_diffs=abl_diffs, base_beats=beats, vel_xyz_accuracies=tuple(vel_xyz.accuracies().tolist()),
-        vel_failed_xyz=vel_xyz.n_failed, shares=tuple(r["share"] for r in spread), **facts)  # type: ignore[arg-type]
+        vel_failed_xyz=vel_xyz.n_failed, shares=tuple(r["share"] for r in spread if r["share"] != "—"),
+        speed_xyz_accuracies=tuple(first["speed"].accuracies().tolist()), heading_table=heading_table,
+        schedule_table=schedule_table, **facts)  # type: ignore[arg-type]
