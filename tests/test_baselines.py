@@ -142,3 +142,23 @@ def test_timed_fits_then_predicts():
     calls = []
     cost = baselines.timed(lambda: calls.append("fit") or "model", lambda m: calls.append(m), 10)
     assert calls == ["fit", "model"] and cost.fit_s >= 0 and cost.infer_s >= 0
+
+
+def test_the_figure_has_every_method_in_every_condition_it_is_scored_in(setup):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from study.book import figures
+
+    _, _, b = setup
+    rows = b.figure
+    assert [r.method for r in rows] == list(baselines.METHOD_NAMES)
+    assert all(list(r.accuracy) == list(baselines.CELLS) for r in rows)
+    assert rows[2].accuracy["z", "observed"] is b.numbers.accuracy["minirocket"]["z"]["observed"]
+    fig = figures.methods_accuracy(rows)
+    ax = fig.axes[0]
+    assert [t.get_text() for t in ax.get_yticklabels()] == list(baselines.METHOD_NAMES.values())
+    assert ax.get_xlabel().startswith("test accuracy (%)")
+    plt.close(fig)

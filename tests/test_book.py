@@ -416,6 +416,10 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
     page = summary.compute(tmp_path / results.FILE, "smoke")  # the summary page's rows, read as typed results
     assert len(page.rows) == len(summary.ROWS) and all(r.verdict for r in page.rows)
     assert all(r.ours for r in page.rows if r.kind in ("number", "order")), "every row of the summary has its number"
+    assert f"Of its {len(page.rows)} tables, figures and claims" in page.findings, "the findings count every row"
+    assert len(page.forest.numbers) == 4, "Table 1's two rows in both engines, each against the paper's number"
+    assert [p.ceiling for p in page.allows.panels] == [page.chapters.motion.ceiling.air_on,
+                                                        page.chapters.motion.ceiling.air_off]
 
 
 def test_chapters_show_the_code_that_teaches_not_the_plumbing() -> None:
@@ -475,3 +479,18 @@ def test_no_chapter_types_a_verdict() -> None:
                     for leaf in ast.walk(a):
                         assert not (isinstance(leaf, ast.Constant) and leaf.value in words), \
                             f"{source.name}, code cell {i}: the verdict {leaf.value!r} is typed in a call to {name}()"
+
+
+def test_a_library_banner_is_dropped_from_the_printed_output_and_nothing_else() -> None:
+    import nbformat
+
+    from study.book import nbtidy
+
+    nb = nbformat.v4.new_notebook()
+    banner = nbformat.v4.new_output("stream", name="stdout", text="pybullet build time: Jan 29 2025 23:17:20\n")
+    mixed = nbformat.v4.new_output("stream", name="stdout", text="a\npybullet build time: Jan 1 2020\nb\n")
+    figure = nbformat.v4.new_output("display_data", data={"text/plain": "x"})
+    nb.cells = [nbformat.v4.new_code_cell("import study", outputs=[banner, mixed, figure])]
+    outputs = nbtidy.drop_banners(nb).cells[0].outputs
+    assert [o.output_type for o in outputs] == ["stream", "display_data"], "the banner-only output removed"
+    assert outputs[0]["text"] == "a\nb\n"

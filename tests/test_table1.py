@@ -9,7 +9,7 @@ import pytest
 
 from fake_runs import cache_models, cache_records
 from study.book import results
-from study.experiments import Runner, paper, table1
+from study.experiments import Runner, paper, table1, verdicts
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
@@ -125,3 +125,49 @@ def test_counts_and_sentences(t1):
     assert t1.n_params > 0 and t1.n_data == 2
     assert "X, Y, Z" in t1.clip_gain and t1.vel_order in ("trails", "beats", "cannot be told apart from")
     assert len(t1.table1.rows) == 6 and t1.table1.markdown().count("\n") == 7, "4 rows, speed and rotated X, Y, Z"
+
+
+def test_the_figure_has_a_column_per_row_of_table_1_with_every_run_and_the_papers_margin(t1):
+    cols = t1.figure
+    assert [(c.network, c.dims) for c in cols] == [("positions", "xyz"), ("positions", "z"), ("velocity", "xyz"),
+                                                    ("velocity", "z"), ("speed", "xyz"), ("rotated", "xyz")]
+    for c in cols:
+        assert tuple(c.runs) == tuple(t1.seeds[c.network].per_data(c.dims)) and c.picked == t1.picked[c.network, c.dims]
+    xyz = cols[0]
+    assert xyz.estimate is t1.numbers.rows["xyz"].paper_way and xyz.paper == paper.TABLE1["xyz"]
+    p = paper.TABLE1["xyz"]
+    assert xyz.margin == pytest.approx(verdicts.MARGIN.delta + 1.96 * np.sqrt(p * (1 - p) / verdicts.MARGIN.n_paper))
+    assert all(c.paper is None and c.margin is None for c in cols[2:]), "beyond the paper: no number to meet"
+    assert cols[-1].estimate is t1.numbers.rotated.mean and len(cols[-1].runs) == 1, "data set 1 only"
+    assert cols[1].label == "Z only" and cols[4].label == "X, Y, Z\nspeed input"
+
+
+def test_the_headline_table_and_the_failed_runs_sentence(t1):
+    head = t1.headline_table
+    assert len(head.rows) == 6 and head.rows[0]["paper"] == "81 %" and head.rows[2]["verdict"] == "beyond the paper"
+    assert head.rows[0]["verdict"] == f"**{t1.numbers.rows['xyz'].paper_way.verdict}**"
+    assert "data set 1" in head.rows[-1]["ours"] and head.rows[4]["row"] == "X, Y, Z, speed input"
+    n = sum(len(r) for c in t1.figure for r in c.runs)
+    assert f"Table 1's {n} runs" in t1.failed_runs and f"{t1.grid_runs} grid runs" in t1.failed_runs
+    assert (t1.paper_xyz, t1.paper_z) == ("81 %", "78 %")
+
+
+def test_the_figure_draws_the_papers_band_beside_every_run(t1):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from study.book import figures
+
+    fig = figures.table1_runs(t1.figure)
+    left, right = fig.axes
+    assert left.get_title().startswith("the paper's network") and right.get_title() == "beyond the paper"
+    assert len(left.patches) == 2 and not right.patches, "a margin band for each of the paper's two numbers"
+    band = left.patches[0]
+    assert band.get_height() == pytest.approx(200 * t1.figure[0].margin)
+    assert left.get_ylabel() == "test accuracy (%)"
+    n_runs = sum(len(r) for c in t1.figure[:2] for r in c.runs)
+    dots = [ln for ln in left.get_lines() if ln.get_marker() in ("o", "x") and ln.get_mfc() != "none"]
+    assert len(dots) == n_runs, "every run of the paper's network drawn"
+    plt.close(fig)

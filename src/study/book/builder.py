@@ -344,7 +344,7 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
             f"('<Figure size ...>'), not as an image: the kernel's matplotlib backend is not the inline one; "
             f"the partial copy is in {ch.failed.relative_to(root)}"
         )
-    nbformat.write(nbtidy.show_parameters_once(executed, parameters), running)
+    nbformat.write(nbtidy.drop_banners(nbtidy.show_parameters_once(executed, parameters)), running)
     ch.executed.parent.mkdir(parents=True, exist_ok=True)
     os.replace(running, ch.executed)  # same filesystem: the complete copy appears in one step
     ch.failed.unlink(missing_ok=True)

@@ -7,6 +7,9 @@
 - **Figures are images.** A figure shown by a kernel whose matplotlib backend is not the inline one
   comes out as its text, ``<Figure size 640x480 with 1 Axes>``, and the book would print that text
   where the figure belongs. :func:`figures_as_text` finds such outputs so the build can fail on them.
+- **No library banners.** pybullet's C code prints ``pybullet build time: ...`` when a kernel first imports it,
+  past Python's redirection in a Jupyter kernel; :func:`drop_banners` removes those lines from the cells'
+  printed output, so a page that only reads Bullet's results does not show them.
 """
 
 from __future__ import annotations
@@ -17,6 +20,8 @@ from typing import Any
 
 FIGURE_TEXT = re.compile(r"^<Figure size [\d.]+x[\d.]+ with \d+ Axes>$")
 """matplotlib's text for a figure: what a figure turns into without an image behind it."""
+BANNER = re.compile(r"^pybullet build time: .*$\n?", re.MULTILINE)
+"""A line a library prints on import, not the cell's output."""
 _ASSIGN = re.compile(r"^(?P<name>[A-Za-z_]\w*)\s*=\s*(?P<value>.*?)(?P<comment>\s*#.*)?$")
 
 
@@ -58,3 +63,20 @@ def figures_as_text(nb: Any) -> list[int]:
                 bad.append(i)
                 break
     return bad
+
+
+def drop_banners(nb: Any) -> Any:
+    """Remove :data:`BANNER` lines from ``nb``'s printed (stream) outputs, and outputs left empty (in place)."""
+    for cell in nb.cells:
+        if "outputs" not in cell:
+            continue
+        kept = []
+        for out in cell["outputs"]:
+            if out.get("output_type") == "stream":
+                text = out.get("text", "")
+                out["text"] = BANNER.sub("", "".join(text) if isinstance(text, list) else text)
+                if not out["text"]:
+                    continue
+            kept.append(out)
+        cell["outputs"] = kept
+    return nb

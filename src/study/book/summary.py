@@ -10,15 +10,16 @@ and what the study adds. No name is built from strings here: every number is a f
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 from study.book import results
 from study.experiments import (baselines, cues, decide, engines, length, motion, paper, realworld, table1, throws,
                                verdicts)
+from study.core.errors import StudyError
 from study.experiments.reported import Leaf, Number, Reported, Verdict
-from study.experiments.text import Bullets, Table, fmt
+from study.experiments.text import Bullets, Table, fmt, fmt_value
 
 
 @dataclass(frozen=True)
@@ -58,11 +59,30 @@ class RowSpec:
     """The number or verdict that carries the row's verdict."""
     chapter: str
     """The chapter it comes from."""
+    parts: Callable[[Chapters], Mapping[str, Number]] | None = None
+    """The numbers behind a combined verdict, each under a short label (None: ``decided`` is the one number)."""
 
 
 def _table1(c: Chapters, d: str) -> str:
-    row = c.table1.rows[d]  # type: ignore[index]
-    return f"the run validation picks: {fmt(row.paper_way)}; mean of seeds {fmt(row.mean)}"
+    return f"the run validation picks: {fmt(c.table1.rows[d].paper_way)}"  # type: ignore[index]
+
+
+def _parts(numbers: Mapping[str, Number]) -> str:
+    """A combined row's numbers, ``'Z only: +1.2 points [...]; X, Y, Z: ...'``."""
+    return "; ".join(f"{label}: {fmt(n)}" for label, n in numbers.items())
+
+
+def _by_dims(numbers: Mapping[str, Number]) -> dict[str, Number]:
+    return {paper.DIMS_NAMES[d]: numbers[d] for d in table1.ORDER if d in numbers}  # type: ignore[index]
+
+
+def _rule_cells(c: Chapters) -> dict[str, Number]:
+    return {f"{paper.DIMS_NAMES[d]}, {cond}": n for d, cells in c.baselines.peephole_minus_rule.items()
+            for cond, n in cells.items()}
+
+
+def _figure3(c: Chapters) -> dict[str, Number]:
+    return {"bounces, light minus heavy": c.data.figure3.bounces, "time to rest": c.data.figure3.time_to_rest}
 
 
 ROWS: tuple[RowSpec, ...] = (
@@ -72,27 +92,28 @@ ROWS: tuple[RowSpec, ...] = (
     RowSpec("Figure 2", "a trajectory: key-framed launch, then physics", lambda c: "the MuJoCo launch and record",
             lambda c: c.data.figure2, "data"),
     RowSpec("Figure 3", "light objects bounce more and stop later",
-            lambda c: f"bounces, light minus heavy: {fmt(c.data.figure3.bounces)}; time to rest: "
-                      f"{fmt(c.data.figure3.time_to_rest)}", lambda c: c.data.figure3.verdict, "data"),
+            lambda c: _parts(_figure3(c)), lambda c: c.data.figure3.verdict, "data", _figure3),
     RowSpec("Table 1, X, Y, Z", f"{paper.TABLE1['xyz']:.0%} (best run)".replace("%", " %"),
             lambda c: _table1(c, "xyz"), lambda c: c.table1.rows["xyz"].paper_way, "table1"),
     RowSpec("Table 1, Z only", f"{paper.TABLE1['z']:.0%} (best run)".replace("%", " %"),
             lambda c: _table1(c, "z"), lambda c: c.table1.rows["z"].paper_way, "table1"),
-    RowSpec("Table 1, claim", "X, Y, Z does better than Z", lambda c: f"{fmt(c.table1.xyz_minus_z)} (difference)",
+    RowSpec("Table 1, claim", "X, Y, Z does better than Z", lambda c: f"X, Y, Z minus Z: {fmt(c.table1.xyz_minus_z)}",
             lambda c: c.table1.xyz_minus_z, "table1"),
     RowSpec("Table 1 in Bullet, X, Y, Z", f"{paper.TABLE1['xyz']:.0%} (the paper's engine)".replace("%", " %"),
             lambda c: fmt(c.engine.table1["xyz"].paper_way), lambda c: c.engine.table1["xyz"].paper_way, "engine"),
     RowSpec("Table 1 in Bullet, Z only", f"{paper.TABLE1['z']:.0%} (the paper's engine)".replace("%", " %"),
             lambda c: fmt(c.engine.table1["z"].paper_way), lambda c: c.engine.table1["z"].paper_way, "engine"),
     RowSpec("Section 2.1, claim", "no simple rule separates the classes; a more involved classifier is needed",
-            lambda c: "a learned classifier against the best one-feature rule, with the air and without it",
-            lambda c: c.baselines.more_involved_required, "baselines"),
+            lambda c: "network minus best rule: " + _parts(_rule_cells(c)),
+            lambda c: c.baselines.more_involved_required, "baselines", _rule_cells),
     RowSpec("Figure 4", "accuracy falls for long inputs",
-            lambda c: f"the longest input minus the best length: Z {fmt(c.length.drop['z'])}",
-            lambda c: c.length.drop_at_long_inputs, "length"),
+            lambda c: "longest minus best length: " + _parts(_by_dims(c.length.drop)),
+            lambda c: c.length.drop_at_long_inputs, "length", lambda c: _by_dims(c.length.drop)),
     RowSpec("Figure 4, explanation", "vanishing or exploding gradients over long inputs",
-            lambda c: "with the gradient reaching every frame, does a memory that spans the input still help? Z "
-                      f"{fmt(c.length.factorial['z'].vanishing)}", lambda c: c.length.paper_explanation, "length"),
+            lambda c: "chrono minus constant forget start, whole gradient: "
+                      + _parts(_by_dims({d: f.vanishing for d, f in c.length.factorial.items()})),
+            lambda c: c.length.paper_explanation, "length",
+            lambda c: _by_dims({d: f.vanishing for d, f in c.length.factorial.items()})),
     RowSpec("Section 2.3, ball", f"{paper.REAL_WORLD['light']:.0%} of {paper.REAL_VIDEOS} golf-ball videos".replace(
             "%", " %"), lambda c: f"{fmt(c.realworld.models['table1'].rendered['light'])} of rendered light throws",
             lambda c: c.realworld.models["table1"].rendered["light"], "realworld"),
@@ -116,6 +137,8 @@ class Row:
     ours: str
     decided: Number | Verdict
     chapter: str
+    parts: tuple[tuple[str, Number], ...] = ()
+    """The numbers behind the verdict, each with a short label (``""`` for a row's one number)."""
 
     @property
     def decision(self) -> verdicts.Decision:
@@ -139,7 +162,245 @@ class Row:
             return f"not comparable: {d.reason}"
         if isinstance(d, verdicts.Qualitative):
             return f"qualitative: {d.criterion}"
-        return d.kind
+        if isinstance(d, verdicts.Combined):
+            return "the verdicts of its numbers combined: " + "; ".join(f"{label}: {n.verdict}" for label, n in self.parts)
+        return {"number": "our interval against the paper's number ± its margin",
+                "order": "our difference against 0 and ±δ"}.get(d.kind, d.kind)
+
+
+def _row(spec: RowSpec, c: Chapters) -> Row:
+    """A row of the page; the numbers behind a combined verdict must decide it again, else the row is wrong."""
+    decided = spec.decided(c)
+    parts = tuple(spec.parts(c).items()) if spec.parts else ((("", decided),) if isinstance(decided, Number) else ())
+    row = Row(spec.paper, spec.claim, spec.ours(c), decided, spec.chapter, parts)
+    if spec.parts and verdicts.combine([n.verdict or "not comparable" for _, n in parts]) != row.verdict:
+        raise StudyError(f"summary, {spec.paper}: its numbers decide {[n.verdict for _, n in parts]}, its verdict "
+                         f"is {row.verdict!r}; the row's parts are not the numbers behind its verdict")
+    return row
+
+
+# ---------------------------------------------------------------------------------------------
+# The findings and the figures' data
+
+
+def _mm(n: Number) -> str:
+    """A camera's error (metres) in millimetres."""
+    return f"{1000 * n.value:.1f} mm"
+
+
+def _count(n: int, word: str) -> str:
+    return f"{n if n else 'none'} {word}"
+
+
+def _paper_pct(p: float) -> str:
+    """A number of the paper as it prints it, ``'81 %'``."""
+    return f"{100 * p:.0f} %"
+
+
+_BOTH = {"reproduced": "both reproduce the paper's", "differs": "both differ from the paper's",
+         "inconclusive": "both inconclusive", "not comparable": "neither comparable"}
+
+
+def _both(numbers: Mapping[str, Number]) -> str:
+    """The verdicts of a row pair (X, Y, Z; Z), in words."""
+    a, b = (numbers[d].verdict for d in table1.ORDER)
+    return _BOTH.get(a or "", f"both {a}") if a == b else f"X, Y, Z {a}, Z {b}"
+
+
+@dataclass(frozen=True)
+class Best:
+    """A column's best learner and its accuracy."""
+
+    name: str
+    """Its name, in words."""
+    accuracy: Number
+
+
+@dataclass(frozen=True)
+class Findings:
+    """The numbers the page's first paragraph tells in words (:attr:`text`)."""
+
+    verdicts: Mapping[str, int]
+    """How many of the paper's rows got each verdict."""
+    table1: Mapping[str, Number]
+    """Table 1 as the paper computes it, ours, in MuJoCo: input -> the run validation picks."""
+    bullet: Mapping[str, Number]
+    """The same in Bullet, the paper's engine."""
+    ceiling: Mapping[str, Number]
+    """The exact ceiling of the priors: ``air_on``, ``air_off``."""
+    drag_rule: Number
+    """One threshold on the first fall's acceleration, exact positions, with air."""
+    network: Mapping[str, Number]
+    """The paper's network on Z, exact positions: ``air_on``, ``air_off``."""
+    camera: Mapping[str, Best]
+    """The best learner through the calibrated camera: ``air_on``, ``air_off``."""
+    camera_error: Number
+    """The calibrated camera's height error, metres."""
+
+    @classmethod
+    def of(cls, c: Chapters, rows: tuple[Row, ...]) -> Findings:
+        m, airs = c.motion, ("air_on", "air_off")
+        camera = {a: Best(motion.NAMES[b.learner], m.learners[b.learner][a]["calibrated"])  # type: ignore[index]
+                  for a in airs for b in (m.best[a]["calibrated"],)}  # type: ignore[index]
+        return cls({v: sum(r.verdict == v for r in rows) for v in verdicts.VERDICTS},
+                   {d: c.table1.rows[d].paper_way for d in table1.ORDER},  # type: ignore[index]
+                   {d: c.engine.table1[d].paper_way for d in table1.ORDER},  # type: ignore[index]
+                   {a: getattr(m.ceiling, a) for a in airs}, c.cues.drag_rule.exact,
+                   {a: m.learners["peephole_positions"][a]["exact"] for a in airs},  # type: ignore[index]
+                   camera, m.noise["calibrated"])  # type: ignore[index]
+
+    @property
+    def text(self) -> str:
+        """The study's findings in plain words: what the paper found, what held, what the motion allows, what a
+        camera leaves of it."""
+        n, t, b = self.verdicts, self.table1, self.bullet
+        held = ", ".join([_count(n["reproduced"], "reproduced")]
+                         + [f"{n[v]} {'differ' if v == 'differs' else v}" for v in ("differs", "inconclusive", "mixed")
+                            if n[v]])
+        held += f"; {n['qualitative']} qualitative and {n['not comparable']} not comparable"
+        on, off = self.camera["air_on"], self.camera["air_off"]
+        return (f"The paper trains a small recurrent network on simulated throws and reports "
+                f"{_paper_pct(paper.TABLE1['xyz'])} with X, Y, Z and {_paper_pct(paper.TABLE1['z'])} with the height "
+                f"alone (Table 1). Of its {sum(n.values())} tables, figures and claims, {held}. Our Table 1 scores "
+                f"{fmt(t['xyz'])} and {fmt(t['z'])} ({_both(t)}); in Bullet, the paper's engine, {fmt(b['xyz'])} and "
+                f"{fmt(b['z'])} ({_both(b)}). What the motion allows is exact: no classifier can beat "
+                f"{fmt_value(self.ceiling['air_off'].value)} without air, {fmt_value(self.ceiling['air_on'].value)} "
+                f"with it, and there one threshold on the first fall's acceleration already scores "
+                f"{fmt(self.drag_rule)}; the paper's network reaches {fmt(self.network['air_on'])} with air and "
+                f"{fmt(self.network['air_off'])} without. A camera leaves less: through the calibrated camera "
+                f"({_mm(self.camera_error)} of height error) the best learner scores {fmt(on.accuracy)} with air "
+                f"({on.name}) and {fmt(off.accuracy)} without ({off.name}).")
+
+
+
+@dataclass(frozen=True)
+class Mark:
+    """One marker of the forest plot: one of our numbers that decides a verdict against the paper."""
+
+    label: str
+    """What it is, short (the row and the part)."""
+    number: Number
+    """Ours with its 95 % interval; its decision holds the paper's number or the claimed order."""
+    verdict: str
+    """Its own verdict."""
+
+    @property
+    def scale(self) -> float:
+        """Factor to the axis' unit: 100 for a fraction (percent, or points for a difference), else 1."""
+        return 100.0 if self.number.unit == "fraction" else 1.0
+
+    @property
+    def paper(self) -> float | None:
+        """The paper's number (a fraction) for a number rule, else None."""
+        d = self.number.decision
+        return d.paper if isinstance(d, verdicts.NumberDecision) else None
+
+    @property
+    def margin(self) -> float:
+        """The half-width around the paper's number inside which ours reproduces it; for an order, δ (0 for a
+        difference that is not in accuracy points)."""
+        d = self.number.decision
+        if isinstance(d, verdicts.NumberDecision):
+            return verdicts.margin(d.paper, verdicts.Margin(d.delta, d.n_paper))
+        assert isinstance(d, verdicts.OrderDecision), self.label
+        return d.delta if d.in_points else 0.0
+
+    @property
+    def sign(self) -> int:
+        """The claimed side of 0 for an order (+1 or -1), 0 for a number."""
+        d = self.number.decision
+        return d.sign if isinstance(d, verdicts.OrderDecision) else 0
+
+
+@dataclass(frozen=True)
+class Forest:
+    """The summary's first figure: every number of the paper that has a margin, every claimed order, and the rows
+    without a marker (:func:`study.book.figures.forest`)."""
+
+    numbers: tuple[Mark, ...]
+    """Ours against a number of the paper and its margin."""
+    orders: tuple[Mark, ...]
+    """Differences of ours against 0 and ±δ, each in its own unit."""
+    unmarked: tuple[tuple[str, str], ...]
+    """(row, verdict) of the rows without a number of ours to draw: qualitative and not comparable."""
+
+    @classmethod
+    def of(cls, rows: tuple[Row, ...]) -> Forest:
+        numbers: list[Mark] = []
+        orders: list[Mark] = []
+        unmarked: list[tuple[str, str]] = []
+        for r in rows:
+            drawn = False
+            for label, n in r.parts:
+                mark = Mark(f"{r.paper}: {label}" if label else r.paper, n, n.verdict or "")
+                if isinstance(n.decision, verdicts.NumberDecision):
+                    numbers.append(mark)
+                elif isinstance(n.decision, verdicts.OrderDecision):
+                    orders.append(mark)
+                else:
+                    continue
+                drawn = True
+            if not drawn:
+                unmarked.append((r.paper, r.verdict))
+        return cls(tuple(numbers), tuple(orders), tuple(unmarked))
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """The orders' units, accuracy points first: one panel each."""
+        seen = dict.fromkeys(m.number.unit for m in self.orders)
+        return tuple(sorted(seen, key=lambda u: u != "fraction"))
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One row of the second figure: a condition the paper did not test, and the learners' accuracy in it."""
+
+    label: str
+    """The condition, in words."""
+    accuracy: Mapping[str, Number]
+    """Learner (``study.experiments.motion.NAMES``) -> its test accuracy there."""
+    best: str | None
+    """The condition's best learner, None where the chapter names none."""
+
+
+@dataclass(frozen=True)
+class Panel:
+    """One air setting of the second figure, with its exact ceiling."""
+
+    title: str
+    ceiling: Number
+    """The exact ceiling of the priors."""
+    conditions: tuple[Condition, ...]
+
+
+@dataclass(frozen=True)
+class Allows:
+    """The summary's second figure: what the study adds (:func:`study.book.figures.what_the_motion_allows`)."""
+
+    panels: tuple[Panel, ...]
+    names: Mapping[str, str]
+    """Learner -> its name in the legend."""
+
+    @classmethod
+    def of(cls, c: Chapters) -> Allows:
+        m, shown = c.motion, ("peephole_positions", "peephole_velocity")
+        panels = []
+        for air, title, ceiling in (("air_on", "the study's throws, with air", m.ceiling.air_on),
+                                    ("air_off", "the same throws without air", m.ceiling.air_off)):
+            rows = []
+            for view in motion.VIEWS:
+                best = m.best[air][view].learner  # type: ignore[index]
+                seen = "exact positions" if view == "exact" else f"{view} camera, {_mm(m.noise[view])} error"  # type: ignore[index]
+                acc = {k: m.learners[k][air][view] for k in (*shown, best)}  # type: ignore[index]
+                rows.append(Condition(f"MuJoCo, {seen}", acc, best))
+            if air == "air_off":  # the engine chapter trains on the air-off throws, in both engines
+                for view in ("exact", "calibrated"):
+                    cross = c.engine.cross
+                    acc = {k: cross[k][view]["bullet_to_bullet"] for k in shown if k in cross}  # type: ignore[index]
+                    rows.append(Condition(f"Bullet, {'exact positions' if view == 'exact' else view + ' camera'}",
+                                          acc, None))
+            panels.append(Panel(title, ceiling, tuple(rows)))
+        return cls(tuple(panels), dict(motion.NAMES))
 
 
 @dataclass(frozen=True)
@@ -164,11 +425,32 @@ class Summary:
     """Of them, accuracies with a 95 % interval."""
 
     @property
+    def findings(self) -> str:
+        """The page's first paragraph: the study's findings in plain words, every number from the results."""
+        return Findings.of(self.chapters, self.rows).text
+
+    @property
+    def forest(self) -> Forest:
+        """The first figure's data (``study.book.figures.forest``)."""
+        return Forest.of(self.rows)
+
+    @property
+    def allows(self) -> Allows:
+        """The second figure's data (``study.book.figures.what_the_motion_allows``)."""
+        return Allows.of(self.chapters)
+
+    @property
     def at_a_glance(self) -> Table:
-        return Table([{"what": r.paper, "paper": r.claim, "ours": r.ours, "verdict": f"**{r.verdict}**",
-                       "rule": r.decided_by, "where": f"{{doc}}`{r.chapter}`"} for r in self.rows],
-                     {"what": "paper", "paper": "the paper's number or claim", "ours": "ours [95 % CI]",
-                      "verdict": "verdict", "rule": "decided by", "where": "chapter"})
+        """Every row of the paper: what it says (linked to the chapter), ours, the verdict; short cells."""
+        return Table([{"paper": f"{{doc}}`{r.paper} <{r.chapter}>`: {r.claim}", "ours": r.ours,
+                       "verdict": f"**{r.verdict}**"} for r in self.rows],
+                     {"paper": "the paper says", "ours": "ours [95 % CI]", "verdict": "verdict"})
+
+    @property
+    def criteria(self) -> Table:
+        """What decided each row's verdict: the rule, or the reason or criterion of a row without a number."""
+        return Table([{"paper": r.paper, "rule": r.decided_by} for r in self.rows],
+                     {"paper": "paper", "rule": "decided by"})
 
     @property
     def counts(self) -> str:
@@ -290,6 +572,6 @@ def compute(results_file: str | Path, preset: str) -> Summary:
     """The summary of the build whose results file is ``results_file``."""
     leaves = results.load(results_file)
     chapters = Chapters.read(leaves)
-    rows = tuple(Row(s.paper, s.claim, s.ours(chapters), s.decided(chapters), s.chapter) for s in ROWS)
+    rows = tuple(_row(s, chapters) for s in ROWS)
     with_ci = sum(1 for n in leaves.values() if isinstance(n, Number) and n.unit == "fraction" and n.lo != n.hi)
     return Summary(Numbers(), chapters, rows, preset, len(leaves), with_ci)

@@ -256,6 +256,17 @@ def costs(runner: Runner, s: Splits) -> dict[Method, Cost]:
 
 
 @dataclass(frozen=True)
+class FigureRow:
+    """One row of the chapter's figure: one method's test accuracy in each condition it is scored in."""
+
+    method: Method
+    name: str
+    """The method in words."""
+    accuracy: dict[tuple[Dims, Condition], Number]
+    """(input, positions) -> its mean test accuracy with the 95 % interval, in :data:`CELLS` order."""
+
+
+@dataclass(frozen=True)
 class Baselines:
     """Everything the chapter shows: its numbers (:attr:`numbers`), its table and its sentences."""
 
@@ -268,6 +279,13 @@ class Baselines:
     """Every method, exact and observed, with its cost."""
     n_seeds: int
     """Seeds of the methods that have one."""
+
+    @property
+    def figure(self) -> tuple[FigureRow, ...]:
+        """The figure's rows: every method, in the table's order, with its accuracy in each of :data:`CELLS`."""
+        acc = self.numbers.accuracy
+        return tuple(FigureRow(m, METHOD_NAMES[m], {(d, c): acc[m][d][c] for d, c in CELLS
+                                                     if c in acc.get(m, {}).get(d, {})}) for m in METHOD_NAMES)
 
     def leader(self, d: Dims, cond: Condition) -> tuple[Method, float]:
         """The method with the highest mean accuracy on (``d``, ``cond``) (ties: the later name in the alphabet),

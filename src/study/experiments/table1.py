@@ -335,6 +335,36 @@ def heading_flips(runner: Runner, cfgs: dict[Network, TrainConfig]) -> dict[Netw
 # The chapter's result
 
 
+SHORT_NAMES: dict[Network, str] = {"positions": "positions", "velocity": "with velocity", "speed": "speed input",
+                                   "rotated": "turned in training"}
+"""Each network in two words, for the figure's axis."""
+
+
+@dataclass(frozen=True)
+class FigureRow:
+    """One column of the chapter's figure: every run of one row of Table 1, our estimate, the paper's number."""
+
+    network: Network
+    dims: Dims
+    runs: tuple[Runs, ...]
+    """The row's runs on each data set, the first first (Table 1's seeds there, the grid's on the others)."""
+    picked: tuple[int, ...]
+    """The seed validation picks on each data set."""
+    estimate: Number
+    """Our estimate, a fraction: the run validation picks, mean over the data sets (the mean of data set 1's seeds
+    for the rotated network, trained there only); with its verdict on the paper's network's rows."""
+    paper: float | None
+    """The paper's number, a fraction (the paper's network only)."""
+    margin: float | None
+    """Its margin M = δ + 1.96 √(p (1 − p) / n), a fraction: ours reproduces it inside paper ± M."""
+
+    @property
+    def label(self) -> str:
+        """The column's name: its input, and the network where it is not the paper's."""
+        dims = paper.DIMS_NAMES[self.dims]
+        return dims if self.network == "positions" else f"{dims}\n{SHORT_NAMES[self.network]}"
+
+
 @dataclass(frozen=True)
 class Table1:
     """Everything the chapter shows: its numbers (:attr:`numbers`), its tables and sentences, its figure's data."""
@@ -423,6 +453,56 @@ class Table1:
     schedule_table: Table
     """The velocity network's schedules on validation."""
 
+    @property
+    def figure(self) -> tuple[FigureRow, ...]:
+        """The figure's columns: the paper's network on X, Y, Z and Z (Table 1), then, beyond the paper, the
+        velocity network's two rows, the speed network's X, Y, Z and the rotated network's X, Y, Z."""
+        cols = [(k, d) for k in ("positions", "velocity") for d in ORDER] + [("speed", "xyz"), ("rotated", "xyz")]
+        out = []
+        for k, d in cols:
+            row = self.row(k, d)  # type: ignore[arg-type]
+            estimate = row.paper_way if row else self.numbers.rotated.mean
+            p = paper.TABLE1[d] if k == "positions" else None
+            out.append(FigureRow(k, d, tuple(self.seeds[k].per_data(d)), self.picked[k, d],  # type: ignore[index]
+                                 estimate, p,
+                                 None if p is None else verdicts.margin(p)))
+        return tuple(out)
+
+    @property
+    def headline_table(self) -> Table:
+        """Table 1 against the paper's, short: each column of :attr:`figure`, our estimate and the verdict."""
+        rows = [{"row": f"{paper.DIMS_NAMES[c.dims]}, {SHORT_NAMES[c.network]}",
+                 "paper": "—" if c.paper is None else pct(c.paper, 0),
+                 "ours": pct_ci(c.estimate.interval) + (" (seeds' mean, data set 1)" if c.network == "rotated" else ""),
+                 "verdict": f"**{c.estimate.verdict}**" if c.estimate.verdict else "beyond the paper"}
+                for c in self.figure]
+        return Table(rows, {"row": "input, network", "paper": "paper", "ours": "ours [95 % CI]", "verdict": "verdict"})
+
+    @property
+    def paper_xyz(self) -> str:
+        """The paper's Table 1, X, Y, Z."""
+        return pct(paper.TABLE1["xyz"], 0)
+
+    @property
+    def paper_z(self) -> str:
+        """The paper's Table 1, Z only."""
+        return pct(paper.TABLE1["z"], 0)
+
+    @property
+    def failed_runs(self) -> str:
+        """How many of Table 1's runs failed to train, and where; the grid's and the protocols' too."""
+        cols = self.figure
+        n = sum(len(r) for c in cols for r in c.runs)
+        where = [(c, sum(r.n_failed for r in c.runs), sum(len(r) for r in c.runs)) for c in cols]
+        bad = [f"{paper.DIMS_NAMES[c.dims]}, {SHORT_NAMES[c.network]}: {k} of {m}" for c, k, m in where if k]
+        total = sum(k for _, k, _ in where)
+        head = (f"None of Table 1's {n} runs failed to train" if not total else
+                f"Of Table 1's {n} runs, {total} failed to train ({'; '.join(bad)}), drawn as crosses and counted "
+                "in the means")
+        return (f"{head}; of the {self.grid_runs} grid runs, {self.grid_failed}. The study's training protocol "
+                f"stalled {self.stalls_study} of {self.n_protocol_runs} validation runs, the first "
+                f"{self.stalls_first} (below).")
+
     def row(self, network: Network, dims: Dims) -> Row | None:
         """The reported row of ``network`` on ``dims`` (None where the chapter has none: the rotated network's, and
         the speed network's Z, which is the velocity network's)."""
@@ -460,10 +540,10 @@ class Table1:
     @property
     def defaults_note(self) -> str:
         if not self.defaults_moved:
-            return ("This is the study's protocol, `TrainConfig`'s defaults, so `study train` with its defaults "
-                    "trains Table 1's configuration.")
-        return ("It differs from `TrainConfig`'s defaults (the study's protocol, what `study train` uses unless told "
-                "otherwise) in " + ", ".join(f"{f} ({a} there, {b} here)" for f, (a, b) in self.defaults_moved.items())
+            return ("Table 1's configuration is the study's protocol, TrainConfig's defaults, so study train with its "
+                    "defaults trains it.")
+        return ("Table 1's configuration differs from TrainConfig's defaults (the study's protocol, what study train "
+                "uses unless told otherwise) in " + ", ".join(f"{f} ({a} there, {b} here)" for f, (a, b) in self.defaults_moved.items())
                 + ".")
 
     @property
@@ -579,6 +659,8 @@ class Table1:
             return "the LSTM beats physics with both inputs"
         if len(behind) == 2:
             return "physics beats the LSTM with both inputs"
+        if not ahead and not behind:
+            return "the LSTM and physics cannot be told apart with either input"
         return (f"the LSTM is ahead with {', '.join(ahead) or 'neither input'} and behind with "
                 f"{', '.join(behind) or 'neither'}; elsewhere the two cannot be told apart")
 
