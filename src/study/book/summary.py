@@ -19,7 +19,7 @@ from study.experiments import (baselines, cues, decide, engines, length, motion,
                                verdicts)
 from study.core.errors import StudyError
 from study.experiments.reported import Leaf, Number, Reported, Verdict
-from study.experiments.text import Bullets, Table, fmt, fmt_value
+from study.experiments.text import Bullets, Table, fmt, fmt_value, pct
 
 
 @dataclass(frozen=True)
@@ -81,6 +81,10 @@ def _rule_cells(c: Chapters) -> dict[str, Number]:
             for cond, n in cells.items()}
 
 
+def _fading(c: Chapters) -> dict[str, Number]:
+    return _by_dims({d: f.vanishing for d, f in c.length.factorial.items()})
+
+
 def _figure3(c: Chapters) -> dict[str, Number]:
     return {"bounces, light minus heavy": c.data.figure3.bounces, "time to rest": c.data.figure3.time_to_rest}
 
@@ -110,10 +114,8 @@ ROWS: tuple[RowSpec, ...] = (
             lambda c: "longest minus best length: " + _parts(_by_dims(c.length.drop)),
             lambda c: c.length.drop_at_long_inputs, "length", lambda c: _by_dims(c.length.drop)),
     RowSpec("Figure 4, explanation", "vanishing or exploding gradients over long inputs",
-            lambda c: "chrono minus constant forget start, whole gradient: "
-                      + _parts(_by_dims({d: f.vanishing for d, f in c.length.factorial.items()})),
-            lambda c: c.length.paper_explanation, "length",
-            lambda c: _by_dims({d: f.vanishing for d, f in c.length.factorial.items()})),
+            lambda c: "chrono minus constant forget start, whole gradient: " + _parts(_fading(c)),
+            lambda c: c.length.paper_explanation, "length", _fading),
     RowSpec("Section 2.3, ball", f"{paper.REAL_WORLD['light']:.0%} of {paper.REAL_VIDEOS} golf-ball videos".replace(
             "%", " %"), lambda c: f"{fmt(c.realworld.models['table1'].rendered['light'])} of rendered light throws",
             lambda c: c.realworld.models["table1"].rendered["light"], "realworld"),
@@ -188,15 +190,6 @@ def _mm(n: Number) -> str:
     return f"{1000 * n.value:.1f} mm"
 
 
-def _count(n: int, word: str) -> str:
-    return f"{n if n else 'none'} {word}"
-
-
-def _paper_pct(p: float) -> str:
-    """A number of the paper as it prints it, ``'81 %'``."""
-    return f"{100 * p:.0f} %"
-
-
 _BOTH = {"reproduced": "both reproduce the paper's", "differs": "both differ from the paper's",
          "inconclusive": "both inconclusive", "not comparable": "neither comparable"}
 
@@ -240,8 +233,8 @@ class Findings:
     @classmethod
     def of(cls, c: Chapters, rows: tuple[Row, ...]) -> Findings:
         m, airs = c.motion, ("air_on", "air_off")
-        camera = {a: Best(motion.NAMES[b.learner], m.learners[b.learner][a]["calibrated"])  # type: ignore[index]
-                  for a in airs for b in (m.best[a]["calibrated"],)}  # type: ignore[index]
+        best = {a: m.best[a]["calibrated"].learner for a in airs}  # type: ignore[index]
+        camera = {a: Best(motion.NAMES[k], m.learners[k][a]["calibrated"]) for a, k in best.items()}  # type: ignore[index]
         return cls({v: sum(r.verdict == v for r in rows) for v in verdicts.VERDICTS},
                    {d: c.table1.rows[d].paper_way for d in table1.ORDER},  # type: ignore[index]
                    {d: c.engine.table1[d].paper_way for d in table1.ORDER},  # type: ignore[index]
@@ -254,13 +247,13 @@ class Findings:
         """The study's findings in plain words: what the paper found, what held, what the motion allows, what a
         camera leaves of it."""
         n, t, b = self.verdicts, self.table1, self.bullet
-        held = ", ".join([_count(n["reproduced"], "reproduced")]
+        held = ", ".join([f"{n['reproduced'] or 'none'} reproduced"]
                          + [f"{n[v]} {'differ' if v == 'differs' else v}" for v in ("differs", "inconclusive", "mixed")
                             if n[v]])
         held += f"; {n['qualitative']} qualitative and {n['not comparable']} not comparable"
         on, off = self.camera["air_on"], self.camera["air_off"]
         return (f"The paper trains a small recurrent network on simulated throws and reports "
-                f"{_paper_pct(paper.TABLE1['xyz'])} with X, Y, Z and {_paper_pct(paper.TABLE1['z'])} with the height "
+                f"{pct(paper.TABLE1['xyz'], 0)} with X, Y, Z and {pct(paper.TABLE1['z'], 0)} with the height "
                 f"alone (Table 1). Of its {sum(n.values())} tables, figures and claims, {held}. Our Table 1 scores "
                 f"{fmt(t['xyz'])} and {fmt(t['z'])} ({_both(t)}); in Bullet, the paper's engine, {fmt(b['xyz'])} and "
                 f"{fmt(b['z'])} ({_both(b)}). What the motion allows is exact: no classifier can beat "

@@ -491,11 +491,9 @@ class Table1:
     @property
     def failed_runs(self) -> str:
         """How many of Table 1's runs failed to train, and where; the grid's and the protocols' too."""
-        cols = self.figure
-        n = sum(len(r) for c in cols for r in c.runs)
-        where = [(c, sum(r.n_failed for r in c.runs), sum(len(r) for r in c.runs)) for c in cols]
+        where = [(c, sum(r.n_failed for r in c.runs), sum(len(r) for r in c.runs)) for c in self.figure]
         bad = [f"{paper.DIMS_NAMES[c.dims]}, {SHORT_NAMES[c.network]}: {k} of {m}" for c, k, m in where if k]
-        total = sum(k for _, k, _ in where)
+        n, total = sum(m for *_, m in where), sum(k for _, k, _ in where)
         head = (f"None of Table 1's {n} runs failed to train" if not total else
                 f"Of Table 1's {n} runs, {total} failed to train ({'; '.join(bad)}), drawn as crosses and counted "
                 "in the means")
