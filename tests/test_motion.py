@@ -232,3 +232,15 @@ def test_the_tables_and_sentences(m):
     assert m.vel_gain_on.startswith(("+", "-")) and m.length_s == 1.0
     assert m.answer.startswith(f"Without air no classifier of these trajectories can beat "
                                f"{pct(m.numbers.ceiling.air_off.value)};")
+
+
+def test_the_wide_tables_split_by_air_and_keep_every_cell(m):
+    for name in ("motion", "gap"):
+        whole = getattr(m, f"{name}_table")
+        on, off = (getattr(m, f"{name.replace('motion', 'table')}_air_{a}") for a in ("on", "off"))
+        assert len(on.columns) == len(off.columns) == 1 + 4, "the learner and four conditions"
+        assert on.columns["air_on.exact"] == "exact" and off.columns["air_off.far"].endswith("55 m")
+        for half in (on, off):
+            assert [r["learner"] for r in half.rows] == [r["learner"] for r in whole.rows]
+            assert all(r[k] == w[k] for r, w in zip(half.rows, whole.rows) for k in half.columns)
+        assert set(on.columns) | set(off.columns) == set(whole.columns)

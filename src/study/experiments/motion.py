@@ -455,6 +455,35 @@ class Motion:
         """The exact ceiling with the air on or off."""
         return self.ceilings["air_on.exact" if air else "air_off.exact"]
 
+    # The wide tables, one air setting at a time (four conditions fit a phone's page) ---------------
+
+    def _half(self, table: Table, air: bool) -> Table:
+        keys = [c.key for c in self.columns if c.air == air]
+        prefix = "air on, " if air else "air off, "
+        heads = {"learner": table.columns["learner"] + (", air on" if air else ", air off"),
+                 **{k: table.columns[k].removeprefix(prefix) for k in keys}}
+        return Table([{k: row[k] for k in heads} for row in table.rows], heads)
+
+    @property
+    def table_air_on(self) -> Table:
+        """:attr:`motion_table`'s air-on columns."""
+        return self._half(self.motion_table, True)
+
+    @property
+    def table_air_off(self) -> Table:
+        """:attr:`motion_table`'s air-off columns."""
+        return self._half(self.motion_table, False)
+
+    @property
+    def gap_air_on(self) -> Table:
+        """:attr:`gap_table`'s air-on columns, points below the ceiling."""
+        return self._half(self.gap_table, True)
+
+    @property
+    def gap_air_off(self) -> Table:
+        """:attr:`gap_table`'s air-off columns, points below the ceiling."""
+        return self._half(self.gap_table, False)
+
     # Sentences whose words depend on the numbers -------------------------------------------------
 
     @property
