@@ -750,20 +750,16 @@ class Cues:
         claims = {d: n.verdict for d, n in self.numbers.network_minus_rule_b.items()}
         beaten = [d for d, v in claims.items() if v != "reproduced"]
         return " ".join([
-            "Taking the air away changes the Z network's accuracy by " + _gap(acc["b", "z"], acc["a", "z"])
+            "Without air the Z network's accuracy changes by " + _gap(acc["b", "z"], acc["a", "z"])
             + " and the X, Y, Z network's by " + _gap(acc["b", "xyz"], acc["a", "xyz"])
+            + f" (the drag rule falls to {pct_ci(self.numbers.drag_rules['b'])}: every object falls at −g)"
             + (": with air, the drag cue carried part of what the Z network did." if carries else
-               ": the Z network's accuracy does not rest on drag (its interval without air is not below the one "
-               "with)."),
-            f"Without air the drag rule is at {pct_ci(self.numbers.drag_rules['b'])}, as it must be: every object "
-            "falls at −g.",
-            "Without drag the networks still beat the best one-feature rule, so the paper's claim that the motion "
-            "pattern needs a learnt classifier survives the removal of the shortcut." if not beaten else
+               ": the Z network does not rest on drag."),
+            "Without drag the networks still beat the best one-feature rule: the paper's claim that the motion "
+            "pattern needs a learnt classifier survives." if not beaten else
             "Without drag the paper's network does not beat the best one-feature rule for "
             + " and ".join(f"{paper.DIMS_NAMES[d]} ({claims[d]})" for d in beaten)
-            + ", so on our data the claim that no simple rule suffices does not survive the removal of the shortcut "
-            "for the paper's network (the chapter *What the motion allows* asks whether another learner does "
-            "better).",
+            + ": on our data the claim that no simple rule suffices does not survive for the paper's network.",
         ])
 
     @property
