@@ -3,6 +3,7 @@ and the chapter *Real-world test*'s numbers, tables and sentences from labels ma
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from types import SimpleNamespace
 
@@ -246,3 +247,18 @@ def test_real_clips_from_a_manifest_or_none(tmp_path, monkeypatch):
     assert realworld.real_clips() == [], "no footage beside the project: no real clips, no error"
     with pytest.raises(DataError, match="MANIFEST.csv"):
         realworld.real_clips(empty)  # a folder the reader named must hold a manifest
+
+
+def test_every_real_clip_is_credited_to_where_it_came_from(tmp_path):
+    (tmp_path / "a.mp4").write_bytes(b"x")
+    (tmp_path / "b.mp4").write_bytes(b"x")
+    (tmp_path / "MANIFEST.csv").write_text(
+        "file,label,object,source_repository,source_commit,source_path,licence\n"
+        "a.mp4,bouncy,a tennis ball,someone/clips,85eec8e,res/a.mp4,none stated\nb.mp4,bouncy,,,,,\n")
+    only = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, [])})
+    r = dataclasses.replace(_result(only, "positions, exact"), real=tuple(realworld.real_clips(tmp_path)))
+    rows = r.credits.rows
+    assert rows[0] == {"file": "a.mp4", "shows": "a tennis ball", "source": "someone/clips 85eec8e res/a.mp4",
+                       "licence": "none stated"}
+    assert rows[1]["source"] == rows[1]["licence"] == "not stated", "a clip without a source says so"
+    assert "No real clips" in _result(only, "positions, exact").credits.markdown()

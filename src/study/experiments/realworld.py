@@ -492,6 +492,18 @@ class RealWorld:
         return "the recommended one, which is Table 1's model itself"
 
     @property
+    def credits(self) -> Table:
+        """Where each real clip comes from, as its manifest says (repository, commit, path, licence)."""
+        rows = []
+        for v in self.real:
+            i = v.info
+            where = " ".join(str(i[k]) for k in ("source_repository", "source_commit", "source_path") if i.get(k))
+            rows.append({"file": v.path.name, "shows": i.get("object", v.label), "source": where or "not stated",
+                         "licence": i.get("licence") or "not stated"})
+        return Table(rows, {"file": "clip", "shows": "what it shows", "source": "recorded by (repository, commit, "
+                            "path)", "licence": "licence"}, empty="*No real clips were classified.*")
+
+    @property
     def real_words(self) -> str:
         real = self.numbers.models["table1"].real
         if not real:
