@@ -380,3 +380,63 @@ def what_the_motion_allows(allows: Any) -> Figure:
                 Line2D([], [], color="0.5", ls=":", lw=1, label="chance")]
     fig.legend(handles=handles, loc="outside upper center", ncol=1, fontsize=8)
     return fig
+
+
+def sample_trajectories(times: Any, x: Any, samples: Mapping[str, Sequence[int]]) -> Figure:
+    """The paper's Figure 3: X, Y and Z against time for a few throws of each class, heavy on top as in the
+    paper. ``times``: (T,) s; ``x``: (n, T, 3) metres; ``samples``: class name -> the throws' indices into ``x``."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 3, figsize=(10, 5.4), sharex=True, squeeze=False)
+    for row, name in enumerate(("heavy", "light")):
+        for col, axis_name in enumerate("XYZ"):
+            ax = axes[row, col]
+            for j in samples[name]:
+                ax.plot(times, x[j, :, col], lw=1.0, alpha=0.8, color=CLASS_COLORS[name])
+            ax.set_title(f"{name}: {axis_name}")
+            ax.set_ylabel(f"{axis_name.lower()}, m")
+            if row == 1:
+                ax.set_xlabel("time, s")
+    return fig
+
+
+def learners_against_camera(curve: Any, ceiling_of: Any, learners: Sequence[str], names: Mapping[str, str]) -> Figure:
+    """Accuracy (%) of each learner against the camera's error (mm, symmetric log scale), air on and off, with
+    the exact ceiling dashed and chance dotted. ``curve(learner, air)`` gives (k,) errors in mm and k intervals
+    (``study.experiments.motion.Motion.curve``); ``ceiling_of(air)`` the ceiling, a fraction."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8), sharey=True)
+    for ax, air in zip(axes, (True, False)):
+        for name in learners:
+            mm, ivs = curve(name, air)
+            ax.errorbar(mm, [100 * iv.value for iv in ivs], capsize=3, marker="o", ms=4,
+                        yerr=[[100 * (iv.value - iv.lo) for iv in ivs], [100 * (iv.hi - iv.value) for iv in ivs]],
+                        label=names[name])
+        ax.axhline(100 * ceiling_of(air), color="black", ls="--", lw=1, label="ceiling")
+        ax.axhline(50, color="0.5", ls=":", lw=1)
+        ax.set(xscale="symlog", xlabel="camera error, mm (symmetric log scale)", title="air on" if air else "air off")
+    axes[0].set_ylabel("test accuracy (%)")
+    axes[1].legend(fontsize=7, loc="lower left")
+    return fig
+
+
+def engine_agreement(differences: Mapping[str, Any], y: Any, labels: Mapping[str, str]) -> Figure:
+    """Histograms, by class, of each per-throw difference Bullet minus MuJoCo. ``differences``: key -> (n,)
+    values in the unit its label names; ``y``: (n,) class indices (0 light, 1 heavy); ``labels``: key -> axis
+    label."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from study import CLASSES
+
+    fig, axes = plt.subplots(1, len(labels), figsize=(12, 3.0), squeeze=False)
+    for ax, (k, label) in zip(axes[0], labels.items()):
+        d = np.asarray(differences[k])
+        lo, hi = np.percentile(d, [1, 99])
+        for c, name in enumerate(CLASSES):
+            ax.hist(d[y == c], bins=np.linspace(lo, hi + 1e-9, 30), alpha=0.6, label=name, color=CLASS_COLORS[name])
+        ax.set(xlabel=f"Bullet − MuJoCo: {label}")
+    axes[0, 0].set_ylabel("test throws")
+    axes[0, 0].legend()
+    return fig
