@@ -258,7 +258,6 @@ def test_every_real_clip_is_credited_to_where_it_came_from(tmp_path):
     only = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, [])})
     r = dataclasses.replace(_result(only, "positions, exact"), real=tuple(realworld.real_clips(tmp_path)))
     rows = r.credits.rows
-    assert rows[0] == {"file": "a.mp4", "shows": "a tennis ball", "source": "someone/clips 85eec8e res/a.mp4",
-                       "licence": "none stated"}
+    assert rows[0] == {"file": "a.mp4", "source": "someone/clips 85eec8e res/a.mp4", "licence": "none stated"}
     assert rows[1]["source"] == rows[1]["licence"] == "not stated", "a clip without a source says so"
     assert "No real clips" in _result(only, "positions, exact").credits.markdown()

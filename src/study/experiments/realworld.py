@@ -498,10 +498,10 @@ class RealWorld:
         for v in self.real:
             i = v.info
             where = " ".join(str(i[k]) for k in ("source_repository", "source_commit", "source_path") if i.get(k))
-            rows.append({"file": v.path.name, "shows": i.get("object", v.label), "source": where or "not stated",
+            rows.append({"file": v.path.name, "source": where or "not stated",
                          "licence": i.get("licence") or "not stated"})
-        return Table(rows, {"file": "clip", "shows": "what it shows", "source": "recorded by (repository, commit, "
-                            "path)", "licence": "licence"}, empty="*No real clips were classified.*")
+        return Table(rows, {"file": "clip", "source": "recorded by (repository, commit, path)", "licence": "licence"},
+                     empty="*No real clips were classified.*")
 
     @property
     def real_words(self) -> str:
