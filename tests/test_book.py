@@ -440,6 +440,19 @@ def test_chapters_show_the_code_that_teaches_not_the_plumbing() -> None:
                 assert not any("glue(" in line for line in lines), f"{source.name}, code cell {i}: glue in a shown cell"
 
 
+def test_no_line_of_prose_starts_with_a_percent_sign() -> None:
+    """MyST reads a line that starts with ``%`` as a comment and drops it: a rewrapped sentence ("gets 71.0
+    % of the test throws right") would lose its second half without a warning."""
+    import jupytext
+
+    for source in sorted((REPO / "book").glob("*.md")):
+        nb = jupytext.read(source, fmt="md:myst")
+        for cell in nb.cells:
+            if cell.cell_type == "markdown":
+                bad = [line for line in cell.source.splitlines() if line.lstrip().startswith("%")]
+                assert not bad, f"{source.name}: a line MyST would drop as a comment: {bad[0][:60]!r}"
+
+
 def test_no_chapter_hides_more_than_15_lines_of_code() -> None:
     """A chapter's science lives in the package: its hidden cells (remove-cell, remove-input, hide-input,
     hide-cell) hold at most 15 code lines that are not blank and not comments, parameter and import cells

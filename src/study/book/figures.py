@@ -416,6 +416,7 @@ def learners_against_camera(curve: Any, ceiling_of: Any, learners: Sequence[str]
         ax.axhline(100 * ceiling_of(air), color="black", ls="--", lw=1, label="ceiling")
         ax.axhline(50, color="0.5", ls=":", lw=1)
         ax.set(xscale="symlog", xlabel="camera error, mm (symmetric log scale)", title="air on" if air else "air off")
+        ax.set_xlim(left=-0.5)  # errors are never negative: no mirrored decades left of 0
     axes[0].set_ylabel("test accuracy (%)")
     axes[1].legend(fontsize=7, loc="lower left")
     return fig
