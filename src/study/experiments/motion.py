@@ -458,10 +458,8 @@ class Motion:
     # The wide tables, one air setting at a time (four conditions fit a phone's page) ---------------
 
     def _half(self, table: Table, air: bool) -> Table:
-        keys = [c.key for c in self.columns if c.air == air]
-        prefix = "air on, " if air else "air off, "
-        heads = {"learner": table.columns["learner"] + (", air on" if air else ", air off"),
-                 **{k: table.columns[k].removeprefix(prefix) for k in keys}}
+        heads = {"learner": f"{table.columns['learner']}, {'air on' if air else 'air off'}",
+                 **{c.key: SHORT[c.name] for c in self.columns if c.air == air}}
         return Table([{k: row[k] for k in heads} for row in table.rows], heads)
 
     @property
