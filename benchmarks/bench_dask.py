@@ -1,7 +1,7 @@
 """Throughput of a batch of training runs on the local process pool against a Dask LocalCluster, in one run.
 
 The same batch of smoke-preset runs (Table 1's smoke configuration over many seeds, Z and X, Y, Z) is trained
-twice into fresh data folders: by ``study.experiments.schedule.run_all`` on a pool of spawned processes (the
+twice into fresh data folders: by ``study.runs.schedule.run_all`` on a pool of spawned processes (the
 default), and on a ``LocalCluster`` with one single-threaded worker per core (``study book --scheduler local``).
 Prints runs per minute for each, the cluster's throughput over the pool's (1.0 = as fast), and whether the
 two gave the same records (they must). The cluster's start-up is timed apart.
@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from study.experiments import paper, preset, runs
+from study.runs import paper, preset, records
 from study.simulate import synth
 
 

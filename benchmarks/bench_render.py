@@ -1,6 +1,6 @@
 """Rendering cost of the real-world chapter's videos: as rendered before vs now, in one run.
 
-The same synthesised throws (one light, one heavy by default, drawn as ``study.experiments.realworld.render_set``
+The same synthesised throws (one light, one heavy by default, drawn as ``study.chapters.realworld.render_set``
 draws them) are rendered with the chapter's settings (320x240, 30 fps, 3 s, two blur sub-frames,
 noise, JPEG, shadows) two ways:
 
@@ -20,7 +20,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from study.experiments import realworld
+from study.chapters import realworld
 from study.see import render
 from study.simulate import synth
 

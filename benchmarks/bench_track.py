@@ -5,7 +5,7 @@ at 30 fps by default) is written to a temporary folder; then the same file is (a
 cv2.VideoCapture and (b) decoded and tracked with study.track. Prints frames per second for both
 and their ratio (tracking pipeline fps / decode-only fps; 1.0 = tracking is free). Target >= 0.8.
 
-When the real clips are present (``study.experiments.realworld.real_clips_dir()``), the same measurement runs on two of
+When the real clips are present (``study.chapters.realworld.real_clips_dir()``), the same measurement runs on two of
 them too (H.264, tennis preset), since real footage decodes slower than mp4v and is harder to track.
 
     PYTHONPATH=src python benchmarks/bench_track.py [--seconds 10] [--repeats 5]
@@ -21,7 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from study.experiments import realworld
+from study.chapters import realworld
 from study.see import track
 from study.see.video import frames
 

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from study.book import results
-from study.experiments.reported import Number
+from study.report.reported import Number
 
 TIMING = ("time.",)
 """Names of numbers that are wall-clock times: listed, never compared."""

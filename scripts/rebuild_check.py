@@ -5,7 +5,7 @@ and one data seed. This script trains Table 1's runs again at the same configura
 build's results file) with the PyTorch time loop instead of the compiled one (``--backend torch``), or
 on a dataset simulated from another seed (``--data-seed 1``), and writes the mean of the seeds under the book's
 names, beside the run validation picks on that one data set (``table1.<dims>.validation_pick``: the book's
-statistic, ``study.experiments.stats.validation_pick``, over one data set instead of the book's several).
+statistic, ``study.runs.stats.validation_pick``, over one data set instead of the book's several).
 With ``--light-priors balls`` it trains them on the study's first light prior (balls'
 masses and restitutions, ``study.simulate.synth.LIGHT_BALLS``) instead of the box-like one. Then
 
@@ -59,9 +59,9 @@ def main(argv: list[str] | None = None) -> int:
     import dataclasses
 
     from study.book import results
-    from study.experiments import Runner, preset, stats
-    from study.experiments.reported import count, number
-    from study.experiments.text import fmt
+    from study.runs import Runner, preset, stats
+    from study.report.reported import count, number
+    from study.report.text import fmt
     from study.learn.train import TrainConfig
     from study.simulate import synth
 

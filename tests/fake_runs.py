@@ -1,5 +1,5 @@
 """Run records written straight into a runner's cache, so a chapter's computation can be tested on real code
-paths without training: ``study.experiments.runs`` reads them as runs trained earlier.
+paths without training: ``study.runs.records`` reads them as runs trained earlier.
 
     runner = Runner.open("smoke", data_dir=tmp_path)
     cache_records(runner, configs, score=lambda cfg: 0.7 if cfg.dims == "z" else 0.8)
@@ -17,7 +17,8 @@ import numpy as np
 import torch
 
 from study.core.cache import write_text_atomic
-from study.experiments import rockets, runs
+from study.methods import rockets
+from study.runs import records
 from study.learn import train
 from study.learn.config import DIMS, TrainConfig
 from study.learn.model import Classifier
@@ -27,12 +28,12 @@ from study.simulate.data import Dataset
 
 def record(dataset: Dataset, cfg: TrainConfig, test: bool, accuracy: float, val_accuracy: float | None = None,
            val_loss: float = 0.45, seed: int = 0) -> dict:
-    """A run record of ``cfg`` on ``dataset`` as ``runs.run`` writes it: right on ``round(accuracy * n)`` of the n
+    """A run record of ``cfg`` on ``dataset`` as ``records.run`` writes it: right on ``round(accuracy * n)`` of the n
     test throws (a seeded random subset) and on ``val_accuracy`` (default: ``accuracy``) of the validation split."""
     va = accuracy if val_accuracy is None else val_accuracy
     n_val = max(1, round(len(dataset.train.y) * cfg.val_fraction))
     rec = {
-        "key": runs.run_key(dataset, cfg, test), "format": runs.RUN_FORMAT, "data_key": dataset.key,
+        "key": records.run_key(dataset, cfg, test), "format": records.RUN_FORMAT, "data_key": dataset.key,
         "config": dataclasses.asdict(cfg), "val_accuracy": va, "val_loss": val_loss, "n_val": n_val,
         "training": training_state(va, val_loss, n_val), "failed": failed_to_train(va, val_loss, n_val),
         "diverged_epoch": None, "best_epoch": 1, "epochs_run": 3,
@@ -64,7 +65,7 @@ def cache_records(runner, cfgs: Iterable[TrainConfig], score: Callable[[TrainCon
         for t in (True, False) if test else (False,):
             rec = record(ds, cfg, t, score(cfg), None if val_score is None else val_score(cfg),
                          0.45 if val_loss is None else val_loss(cfg))
-            write_text_atomic(runs.record_path(runner.data_dir, rec["key"]), json.dumps(rec) + "\n")
+            write_text_atomic(records.record_path(runner.data_dir, rec["key"]), json.dumps(rec) + "\n")
 
 
 def cache_models(runner, cfgs: Iterable[TrainConfig], dataset: Dataset | None = None) -> None:
@@ -75,12 +76,12 @@ def cache_models(runner, cfgs: Iterable[TrainConfig], dataset: Dataset | None = 
         torch.manual_seed(cfg.seed)
         net = Classifier(len(DIMS[cfg.dims]), cfg.hidden, cfg.layers, cfg.dropout, cfg.cell, inputs=cfg.inputs,
                          fps=ds.fps)
-        train.TrainedModel(net, cfg, ds.fps, ds.key).save(runs.model_dir(ds, cfg, runner.data_dir))
+        train.TrainedModel(net, cfg, ds.fps, ds.key).save(records.model_dir(ds, cfg, runner.data_dir))
 
 
 def cache_rocket(runner, dims: str, n_frames: int, seed: int, tests: dict[str, np.ndarray],
                  labels: dict[str, np.ndarray], train_x: np.ndarray | None = None) -> None:
-    """A MiniRocket fit's record (``study.experiments.rockets``) whose labels on each of ``tests`` are ``labels``,
+    """A MiniRocket fit's record (``study.methods.rockets``) whose labels on each of ``tests`` are ``labels``,
     so ``runner.rocket(dims, n_frames, seed, tests, train_x)`` reads them instead of fitting."""
     key = rockets.rocket_key(runner.dataset, dims, n_frames, seed, tests, train_x)  # type: ignore[arg-type]
     body = {"key": key, "format": rockets.FORMAT, "predictions": {k: np.asarray(v).tolist() for k, v in labels.items()}}

@@ -8,8 +8,10 @@ import pytest
 
 from fake_runs import cache_models, cache_records, cache_rocket
 from study.book import results
-from study.experiments import Runner, baselines, paper, stats, verdicts
-from study.experiments.runner import OBSERVED_SEEDS
+from study.runs import Runner, paper, stats
+from study.chapters import baselines
+from study.report import verdicts
+from study.runs.runner import OBSERVED_SEEDS
 from study.learn.config import TrainConfig
 from study.simulate import measure
 from study.simulate.observe import Observation

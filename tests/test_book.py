@@ -468,12 +468,12 @@ def test_no_chapter_hides_more_than_15_lines_of_code() -> None:
 
 
 def test_no_chapter_types_a_verdict() -> None:
-    """Verdicts are decided by study.experiments.verdicts from numbers, never written: no code cell of any chapter
+    """Verdicts are decided by study.report.verdicts from numbers, never written: no code cell of any chapter
     passes a verdict word as a string literal to anything that records or builds a verdict, or compares a verdict
     with one to choose another."""
     import jupytext
 
-    from study.experiments import verdicts
+    from study.report import verdicts
 
     words = set(verdicts.VERDICTS)
     takers = {"verdict", "add", "Decision", "combine", "Verdict", "number", "order", "combined"}

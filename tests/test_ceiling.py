@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from study.core.errors import ConfigError
-from study.experiments import ceiling
+from study.methods import ceiling
 from study.simulate import synth
 
 

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from study.book import results
-from study.experiments import reported, verdicts
+from study.report import reported, verdicts
 from study.learn.metrics import Interval
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "compare_builds.py"

@@ -1,4 +1,4 @@
-"""The chapter *What the network sees* (study.experiments.cues): each step on toy data whose only cue is known, the
+"""The chapter *What the network sees* (study.chapters.cues): each step on toy data whose only cue is known, the
 result assembled from fake parts, and the whole computation on run records written into a fresh cache."""
 
 from __future__ import annotations
@@ -13,10 +13,11 @@ import pytest
 from fake_runs import cache_records
 from study.book import results
 from study.book.publish import glued
-from study.experiments import Runner, cues, paper, runs
-from study.experiments.runtable import Run, Runs
-from study.experiments.tracker import Decomposition, TrackerError
-from study.experiments.tracker_model import TrackerFit
+from study.runs import Runner, paper, records
+from study.chapters import cues
+from study.runs.runtable import Run, Runs
+from study.methods.tracker import Decomposition, TrackerError
+from study.methods.tracker_model import TrackerFit
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
 from study.simulate import data, observe
@@ -272,7 +273,7 @@ def whole(tmp_path_factory):
     def would_train(*args, **kwargs):
         raise AssertionError(f"the chapter trained a run instead of reading its record: {args[1]}")
 
-    mp.setattr(runs, "run", would_train)
+    mp.setattr(records, "run", would_train)
     mp.setattr(Runner, "rendered", lambda self: (["rendered.mp4"] * 3, None))
     mp.setattr(Runner, "tracker_error", lambda self: TrackerError(1.0, 0.014, 0.05, 90, 0.014))
     mp.setattr(Runner, "tracker_fit", lambda self: FIT)

@@ -8,8 +8,9 @@ import pytest
 
 from study.book import results
 from study.core.errors import ConfigError
-from study.experiments import Runner, decide, motion, paper
-from study.experiments.tracker import TrackerError
+from study.runs import Runner, paper
+from study.chapters import decision, motion
+from study.methods.tracker import TrackerError
 
 
 @pytest.fixture
@@ -23,10 +24,10 @@ def scores():
 def test_the_threshold_meets_the_target_miss_rate(scores):
     p, y = scores
     for target in (0.01, 0.05, 0.2):
-        t = decide.threshold_for_miss_rate(p, y, target)
+        t = decision.threshold_for_miss_rate(p, y, target)
         misses = np.mean(p[y == 1] < t)
         assert misses <= target and misses > target - 2 / 5000  # as high as the target allows
-    r = decide.rates(p, y, decide.threshold_for_miss_rate(p, y, 0.01))
+    r = decision.rates(p, y, decision.threshold_for_miss_rate(p, y, 0.01))
     assert r.miss.value <= 0.01 and r.miss.lo <= r.miss.value <= r.miss.hi
     assert 0 < r.false_alarm.value < 1  # the price of a low miss rate
 
@@ -35,26 +36,26 @@ def test_the_threshold_meets_the_target_miss_rate(scores):
 def test_a_target_outside_0_1_is_refused(scores, target):
     p, y = scores
     with pytest.raises(ConfigError, match="target miss rate"):
-        decide.threshold_for_miss_rate(p, y, target)
+        decision.threshold_for_miss_rate(p, y, target)
 
 
 def test_an_empty_set_or_one_without_heavy_objects_is_refused():
     with pytest.raises(ConfigError, match="empty"):
-        decide.threshold_for_miss_rate(np.array([]), np.array([]), 0.01)
+        decision.threshold_for_miss_rate(np.array([]), np.array([]), 0.01)
     with pytest.raises(ConfigError, match="no heavy"):
-        decide.threshold_for_miss_rate(np.array([0.2, 0.4]), np.array([0, 0]), 0.01)
+        decision.threshold_for_miss_rate(np.array([0.2, 0.4]), np.array([0, 0]), 0.01)
     with pytest.raises(ConfigError, match=r"\[0, 1\]"):
-        decide.rates(np.array([1.5]), np.array([1]), 0.5)
+        decision.rates(np.array([1.5]), np.array([1]), 0.5)
 
 
 def test_roc_and_precision_recall_of_perfect_and_random_scores():
     y = np.repeat([0, 1], 500)
-    fpr, tpr = decide.roc(np.where(y == 1, 0.9, 0.1), y)
-    assert decide.auc(fpr, tpr) == pytest.approx(1.0)
+    fpr, tpr = decision.roc(np.where(y == 1, 0.9, 0.1), y)
+    assert decision.auc(fpr, tpr) == pytest.approx(1.0)
     rng = np.random.default_rng(1)
-    fpr, tpr = decide.roc(rng.random(1000), y)
-    assert decide.auc(fpr, tpr) == pytest.approx(0.5, abs=0.05)
-    recall, precision = decide.precision_recall(rng.random(1000), y)
+    fpr, tpr = decision.roc(rng.random(1000), y)
+    assert decision.auc(fpr, tpr) == pytest.approx(0.5, abs=0.05)
+    recall, precision = decision.precision_recall(rng.random(1000), y)
     assert recall[-1] == 1.0 and precision[-1] == pytest.approx(0.5)
 
 
@@ -62,23 +63,23 @@ def test_calibration_error_and_temperature_scaling():
     rng = np.random.default_rng(2)
     true_p = rng.random(20000)
     y = (rng.random(20000) < true_p).astype(int)
-    assert decide.expected_calibration_error(true_p, y) < 0.02  # calibrated by construction
-    overconfident = decide.scaled(true_p, 1 / 3)  # logits three times too large
-    assert decide.expected_calibration_error(overconfident, y) > 0.1
-    t = decide.fit_temperature(overconfident, y)
+    assert decision.expected_calibration_error(true_p, y) < 0.02  # calibrated by construction
+    overconfident = decision.scaled(true_p, 1 / 3)  # logits three times too large
+    assert decision.expected_calibration_error(overconfident, y) > 0.1
+    t = decision.fit_temperature(overconfident, y)
     assert t == pytest.approx(3.0, rel=0.1)
-    assert decide.expected_calibration_error(decide.scaled(overconfident, t), y) < 0.02
+    assert decision.expected_calibration_error(decision.scaled(overconfident, t), y) < 0.02
     with pytest.raises(ConfigError, match="temperature"):
-        decide.scaled(true_p, 0.0)
+        decision.scaled(true_p, 0.0)
 
 
 def test_time_to_clear():
     p = np.array([[0.9, 0.5, 0.2, 0.1], [0.9, 0.9, 0.9, 0.9], [0.1, 0.9, 0.9, 0.9]])
     thr = np.array([0.3, 0.3, 0.3, 0.3])
-    assert decide.time_to_clear(p, thr).tolist() == [2, -1, 0]
+    assert decision.time_to_clear(p, thr).tolist() == [2, -1, 0]
     with pytest.raises(ConfigError, match="thresholds"):
-        decide.time_to_clear(p, thr[:2])
-    assert math.isfinite(decide.fit_temperature(np.array([0.2, 0.8]), np.array([0, 1])))
+        decision.time_to_clear(p, thr[:2])
+    assert math.isfinite(decision.fit_temperature(np.array([0.2, 0.8]), np.array([0, 1])))
 
 
 def test_clearing_thresholds_bound_the_cumulative_miss_rate():
@@ -87,51 +88,51 @@ def test_clearing_thresholds_bound_the_cumulative_miss_rate():
     y = np.repeat([0, 1], n // 2)
     drift = np.linspace(0, 2, T)[None, :] * np.where(y == 1, 1, -1)[:, None]  # evidence grows with time
     p = 1 / (1 + np.exp(-(drift + rng.standard_normal((n, T)))))
-    thr = decide.clearing_thresholds(p, y, 0.01)
-    ever = decide.time_to_clear(p[y == 1], thr) >= 0
+    thr = decision.clearing_thresholds(p, y, 0.01)
+    ever = decision.time_to_clear(p[y == 1], thr) >= 0
     assert ever.mean() <= 0.01  # a heavy object cleared at any frame is a miss
-    cleared = decide.time_to_clear(p[y == 0], thr)
+    cleared = decision.time_to_clear(p[y == 0], thr)
     assert (cleared >= 0).mean() > 0.5 and np.median(cleared[cleared >= 0]) > 0
-    per_frame = np.array([decide.threshold_for_miss_rate(p[:, t], y, 0.01) for t in range(T)])
-    assert (decide.time_to_clear(p[y == 1], per_frame) >= 0).mean() > 0.01  # per-frame 1 % is not enough
+    per_frame = np.array([decision.threshold_for_miss_rate(p[:, t], y, 0.01) for t in range(T)])
+    assert (decision.time_to_clear(p[y == 1], per_frame) >= 0).mean() > 0.01  # per-frame 1 % is not enough
 
 
 def test_the_clopper_pearson_bound_of_known_cases():
-    assert 0.0099 < decide.clopper_pearson_upper(0, 299) < 0.01 < decide.clopper_pearson_upper(0, 298) < 0.0101
-    assert decide.clopper_pearson_upper(0, 299) == pytest.approx(1 - 0.05 ** (1 / 299))  # (1 - p)^n = 0.05
-    assert decide.clopper_pearson_upper(1, 20) == pytest.approx(0.2161, abs=1e-4)
-    assert decide.clopper_pearson_upper(20, 20) == 1.0
-    assert decide.clopper_pearson_upper(1, 20, level=0.99) > decide.clopper_pearson_upper(1, 20)
+    assert 0.0099 < decision.clopper_pearson_upper(0, 299) < 0.01 < decision.clopper_pearson_upper(0, 298) < 0.0101
+    assert decision.clopper_pearson_upper(0, 299) == pytest.approx(1 - 0.05 ** (1 / 299))  # (1 - p)^n = 0.05
+    assert decision.clopper_pearson_upper(1, 20) == pytest.approx(0.2161, abs=1e-4)
+    assert decision.clopper_pearson_upper(20, 20) == 1.0
+    assert decision.clopper_pearson_upper(1, 20, level=0.99) > decision.clopper_pearson_upper(1, 20)
     with pytest.raises(ConfigError, match="k = 3 of n = 2"):
-        decide.clopper_pearson_upper(3, 2)
+        decision.clopper_pearson_upper(3, 2)
     with pytest.raises(ConfigError, match="confidence level"):
-        decide.clopper_pearson_upper(1, 20, level=1.0)
+        decision.clopper_pearson_upper(1, 20, level=1.0)
 
 
 def test_the_certified_threshold_refuses_a_small_set_and_handles_ties(scores):
     p, y = scores
     small = np.r_[np.zeros(50, int), np.ones(298, int)]
-    assert decide.certified_threshold(np.linspace(0, 1, len(small)), small, 0.01) is None  # 298 < 299 heavy
+    assert decision.certified_threshold(np.linspace(0, 1, len(small)), small, 0.01) is None  # 298 < 299 heavy
     frames = np.linspace(0, 1, len(small))[:, None].repeat(3, 1)
-    assert decide.certified_clearing_thresholds(frames, small, 0.01) is None
+    assert decision.certified_clearing_thresholds(frames, small, 0.01) is None
     enough = np.r_[np.zeros(50, int), np.ones(299, int)]
-    t = decide.certified_threshold(np.linspace(0.01, 1, len(enough)), enough, 0.01)
+    t = decision.certified_threshold(np.linspace(0.01, 1, len(enough)), enough, 0.01)
     assert t == pytest.approx(0.01 + 0.99 * 50 / 348)  # k = 0: the smallest heavy score, nothing below it
-    plain, certified = decide.threshold_for_miss_rate(p, y, 0.01), decide.certified_threshold(p, y, 0.01)
+    plain, certified = decision.threshold_for_miss_rate(p, y, 0.01), decision.certified_threshold(p, y, 0.01)
     assert certified < plain  # 5000 heavy: 50 misses allowed on the split, 38 certified
-    assert decide.clopper_pearson_upper(38, 5000) <= 0.01 < decide.clopper_pearson_upper(39, 5000)
+    assert decision.clopper_pearson_upper(38, 5000) <= 0.01 < decision.clopper_pearson_upper(39, 5000)
     assert np.sum(p[y == 1] < certified) == 38 < np.sum(p[y == 1] < np.nextafter(certified, 1))
     # ties: 400 heavy allow 12 certified misses at 5 %; 10 heavy at 0.1, 10 at 0.2, 380 at 0.9
     heavy = np.r_[np.full(10, 0.1), np.full(10, 0.2), np.full(380, 0.9)]
     yt = np.r_[np.zeros(5, int), np.ones(400, int)]
-    t = decide.certified_threshold(np.r_[np.full(5, 0.05), heavy], yt, 0.05)
+    t = decision.certified_threshold(np.r_[np.full(5, 0.05), heavy], yt, 0.05)
     assert t == 0.2 and np.sum(heavy < t) == 10  # any higher threshold would miss 20 > 12
     with pytest.raises(ConfigError, match="target miss rate"):
-        decide.certified_threshold(p, y, 0.0)
+        decision.certified_threshold(p, y, 0.0)
     with pytest.raises(ConfigError, match="no heavy"):
-        decide.certified_threshold(np.array([0.2, 0.4]), np.array([0, 0]), 0.01)
+        decision.certified_threshold(np.array([0.2, 0.4]), np.array([0, 0]), 0.01)
     with pytest.raises(ConfigError, match="confidence level"):
-        decide.certified_threshold(p, y, 0.01, level=0.0)
+        decision.certified_threshold(p, y, 0.01, level=0.0)
 
 
 def test_the_certified_threshold_holds_on_data_it_has_not_seen():
@@ -144,10 +145,10 @@ def test_the_certified_threshold_holds_on_data_it_has_not_seen():
     draws, n, target = 1000, 500, 0.05
     heavy, light = rng.beta(5, 2, (draws, n)), rng.beta(2, 5, (draws, 100))
     y = np.r_[np.zeros(100, int), np.ones(n, int)]
-    cert = np.array([decide.certified_threshold(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
-    plain = np.array([decide.threshold_for_miss_rate(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
+    cert = np.array([decision.certified_threshold(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
+    plain = np.array([decision.threshold_for_miss_rate(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
     held, held_plain = np.mean(stats.beta.cdf(cert, 5, 2) <= target), np.mean(stats.beta.cdf(plain, 5, 2) <= target)
-    k = decide._certified_misses(n, target, 0.95)  # 16 certified misses of 500
+    k = decision._certified_misses(n, target, 0.95)  # 16 certified misses of 500
     assert 1 - stats.binom.cdf(k, n, target) >= 0.95  # the exact coverage of the (k + 1)-th smallest score: 0.966
     assert held >= 0.95 and held_plain < 0.6, (held, held_plain)
 
@@ -175,39 +176,39 @@ def test_certified_clearing_thresholds_hold_on_data_they_have_not_seen(frames):
 
     held = []
     for _ in range(draws):
-        thr = decide.certified_clearing_thresholds(np.r_[rng.beta(2, 5, (100, T)), heavy(n)], y, target)
+        thr = decision.certified_clearing_thresholds(np.r_[rng.beta(2, 5, (100, T)), heavy(n)], y, target)
         if frames == "independent":
             true = 1 - np.prod(1 - stats.beta.cdf(thr, a_t, 2.0))
         elif frames == "monotone":  # cleared at frame t iff u < thr_t^(1 / c_t)
             true = np.max(thr ** (1 / c_t))
         else:
-            true = np.mean(decide.time_to_clear(heavy(20000), thr) >= 0)
+            true = np.mean(decision.time_to_clear(heavy(20000), thr) >= 0)
         held.append(true <= target)
     assert np.mean(held) >= 0.95, np.mean(held)
 
 
 def test_what_the_decision_chapter_reads_off_a_split(scores):
-    assert decide.heavy_needed(0.01) == 299 and decide.heavy_needed(0.05) == 59
+    assert decision.heavy_needed(0.01) == 299 and decision.heavy_needed(0.05) == 59
     p, y = scores
     half = np.arange(len(y)) % 2 == 0  # certification and test splits, both classes in each
-    op = decide.operating_point(p[half], y[half], p[~half], y[~half], 0.01)
-    assert op.certified == decide.certified_threshold(p[half], y[half], 0.01) < op.empirical
+    op = decision.operating_point(p[half], y[half], p[~half], y[~half], 0.01)
+    assert op.certified == decision.certified_threshold(p[half], y[half], 0.01) < op.empirical
     assert op.miss.value <= op.miss_empirical.value
     assert op.false_alarm.value >= op.false_alarm_empirical.value
     few = np.r_[np.zeros(10, int), np.ones(100, int)]
-    none = decide.operating_point(np.linspace(0, 1, 110), few, p, y, 0.01)
+    none = decision.operating_point(np.linspace(0, 1, 110), few, p, y, 0.01)
     assert none.certified is None and none.miss is None and none.miss_empirical is not None
     rng = np.random.default_rng(4)
     n, T = 2000, 10
     yy = np.repeat([0, 1], n // 2)
     drift = np.linspace(0, 2, T)[None, :] * np.where(yy == 1, 1, -1)[:, None]
     f_cert, f_test = (1 / (1 + np.exp(-(drift + rng.standard_normal((n, T))))) for _ in range(2))
-    c = decide.clearing(f_cert, yy, f_test, yy, 0.05)
+    c = decision.clearing(f_cert, yy, f_test, yy, 0.05)
     assert c.thresholds.shape == (T,) and c.cleared.shape == (n // 2,)
     assert c.share_cleared.value == c.cleared.mean() and len(c.times) == c.cleared.sum()
     assert (c.times >= 0).all() and c.miss.value < 0.1
-    assert decide.clearing(f_cert[:300], yy[:300] * 0 + 1, f_test, yy, 0.01) is not None
-    assert decide.clearing(f_cert[:200], np.ones(200, int), f_test, yy, 0.01) is None
+    assert decision.clearing(f_cert[:300], yy[:300] * 0 + 1, f_test, yy, 0.01) is not None
+    assert decision.clearing(f_cert[:200], np.ones(200, int), f_test, yy, 0.01) is None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -241,31 +242,31 @@ def _frames(rng, y, S, T):
     return 1 / (1 + np.exp(-(drift + offset + 0.1 * rng.standard_normal((S, len(y), T)))))
 
 
-def _chapter(n_cert_per_class: int, unstable: bool = False) -> decide.CarDecision:
+def _chapter(n_cert_per_class: int, unstable: bool = False) -> decision.CarDecision:
     rng = np.random.default_rng(1)
     T, fps, seeds = 12, 10.0, (0, 1)
     y_test, y_cert = np.repeat([0, 1], 300), np.repeat([0, 1], n_cert_per_class)
     x_test, x_cert = _inputs(rng, y_test, T + 2), _inputs(rng, y_cert, T + 2)
-    sp = decide.Splits(T, fps, x_test, y_test, x_cert, y_cert, x_test[:, :T] * 0.9, x_cert[:, :T] * 0.9)
-    camera = decide.CameraChoice({"positions": 0.7, "velocity": 0.8}, "velocity", decide.TrainConfig(loss_at="every"))
+    sp = decision.Splits(T, fps, x_test, y_test, x_cert, y_cert, x_test[:, :T] * 0.9, x_cert[:, :T] * 0.9)
+    camera = decision.CameraChoice({"positions": 0.7, "velocity": 0.8}, "velocity", decision.TrainConfig(loss_at="every"))
     observed_test = _frames(rng, y_test, 2, T)
     if unstable:  # seed 1 learnt nothing on the test throws: it calls every one heavy, and clears none
         observed_test[1] = 0.99
-    nets = {"exact": decide.EveryFrame("the paper's network, exact positions", camera.config,
+    nets = {"exact": decision.EveryFrame("the paper's network, exact positions", camera.config,
                                        _frames(rng, y_test, 2, T), _frames(rng, y_cert, 2, T)),
-            "observed": decide.EveryFrame("the velocity network under the calibrated tracker", camera.config,
+            "observed": decision.EveryFrame("the velocity network under the calibrated tracker", camera.config,
                                           observed_test, _frames(rng, y_cert, 2, T))}
     models = [Scored(1.0), Scored(3.0)]
     conditions = {
-        "exact": decide.condition("Table 1's, exact", models, x_cert, y_cert, x_test, y_test, 0.01),
-        "observed": decide.condition("Table 1's, observed", models, sp.observed_certify, y_cert, sp.observed_test,
+        "exact": decision.condition("Table 1's, exact", models, x_cert, y_cert, x_test, y_test, 0.01),
+        "observed": decision.condition("Table 1's, observed", models, sp.observed_certify, y_cert, sp.observed_test,
                                      y_test, 0.01),
-        "randomised": decide.condition("trained on random observations, observed", models, sp.observed_certify,
+        "randomised": decision.condition("trained on random observations, observed", models, sp.observed_certify,
                                        y_cert, sp.observed_test, y_test, 0.01),
-        "camera": decide.condition("the camera's network (velocity), observed", models[::-1], sp.observed_certify,
+        "camera": decision.condition("the camera's network (velocity), observed", models[::-1], sp.observed_certify,
                                    y_cert, sp.observed_test, y_test, 0.01),
     }
-    return decide.assemble(sp, camera, nets, conditions, seeds, 0.01)
+    return decision.assemble(sp, camera, nets, conditions, seeds, 0.01)
 
 
 @pytest.fixture(scope="module")
@@ -288,7 +289,7 @@ def test_a_certifiable_chapter_reports_its_operating_points_under_their_names(ce
     assert n.clear["observed"].share_by_end.source["stable"] is True
     f = tmp_path / "results.json"
     f.write_text(results.dumps(n.entries()))
-    assert decide.Numbers.read(results.load(f)) == n, "the summary reads the tree back"
+    assert decision.Numbers.read(results.load(f)) == n, "the summary reads the tree back"
 
 
 def test_a_certifiable_chapter_says_what_a_car_would_do(certified):
@@ -324,7 +325,7 @@ def test_too_few_heavy_throws_certify_nothing_and_the_chapter_says_so(tmp_path):
     assert "not certifiable" in c.clear_table.markdown() and c.decision_table.rows[0]["thr"] == "not certifiable"
     f = tmp_path / "results.json"
     f.write_text(results.dumps(n.entries()))
-    assert decide.Numbers.read(results.load(f)) == n
+    assert decision.Numbers.read(results.load(f)) == n
 
 
 def test_the_camera_network_is_chosen_on_observed_validation_and_the_splits_are_their_own(tmp_path, monkeypatch):
@@ -342,16 +343,16 @@ def test_the_camera_network_is_chosen_on_observed_validation_and_the_splits_are_
     for k, cfg in observed.items():
         val = 0.8 if k == "positions" else 0.6
         cache_records(runner, paper.seed_configs(cfg, p.grid_seeds, ("z",)), val_score=lambda c, v=val: v)
-    camera = decide.camera_network(runner)
+    camera = decision.camera_network(runner)
     assert camera.best == "positions" and camera.val == pytest.approx({"positions": 0.8, "velocity": 0.6})
     assert camera.config.loss_at == "every" and camera.config.observe == "fixed"
     assert camera.config.observe_noise == 0.015
     assert camera.config.inputs == "positions" and camera.config.observe_drop == 0.05
-    sp = decide.splits(runner)
+    sp = decision.splits(runner)
     T = runner.table1_config().n_frames(runner.fps)
     assert sp.certify_x.shape == (2 * p.certify_per_class, T + 2, 3)
     assert (sp.certify_y == 1).sum() == p.certify_per_class
     assert sp.observed_test.shape == (len(runner.dataset.test.y), T, 3) and sp.observed_certify.shape[1] == T
     assert not np.allclose(sp.observed_test, runner.dataset.test.x[:, :T]), "observed with the tracker's error"
     assert not np.array_equal(sp.observed_test, runner.observed("test", error.observation(), T)), "its own draw"
-    np.testing.assert_array_equal(decide.splits(runner).observed_certify, sp.observed_certify)
+    np.testing.assert_array_equal(decision.splits(runner).observed_certify, sp.observed_certify)

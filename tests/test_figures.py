@@ -19,8 +19,8 @@ def test_the_class_colours_are_colour_blind_safe_and_start_the_cycle() -> None:
 
 
 def test_accuracy_vs_length_draws_both_inputs_with_failed_runs_marked() -> None:
-    from study.experiments.runtable import Run, Runs
-    from study.experiments.stats import Summary
+    from study.runs.runtable import Run, Runs
+    from study.runs.stats import Summary
     from study.learn.config import TrainConfig
     from study.learn.metrics import Interval
 

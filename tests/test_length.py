@@ -15,8 +15,9 @@ import matplotlib.pyplot as plt
 
 from fake_runs import cache_records
 from study.book import figures, results
-from study.experiments import PRESETS, Runner, length, paper, stats
-from study.experiments.runtable import Run, Runs
+from study.runs import PRESETS, Runner, paper, stats
+from study.chapters import length
+from study.runs.runtable import Run, Runs
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval
 

@@ -11,9 +11,10 @@ import pytest
 
 from fake_runs import cache_models, cache_records, cache_rocket
 from study.book import results
-from study.experiments import Runner, motion, paper, stats
-from study.experiments.text import pct, pct_ci, seeds_ci
-from study.experiments.tracker import TrackerError
+from study.runs import Runner, paper, stats
+from study.chapters import motion
+from study.report.text import pct, pct_ci, seeds_ci
+from study.methods.tracker import TrackerError
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
 from study.simulate import synth

@@ -64,7 +64,7 @@ def test_the_run_closure_holds_what_makes_a_record_and_the_engines_stay_apart():
     run = set(cache.closure(cache.PRODUCERS["run"][0]))
     for rel in ("learn/train.py", "learn/stack.py", "learn/model.py", "learn/peephole.py", "learn/gru.py",
                 "learn/native.py", "learn/peephole.cpp", "learn/rnn_math.h", "learn/metrics.py", "learn/config.py",
-                "simulate/observe.py", "simulate/data.py", "core/cache.py", "experiments/runs.py"):
+                "simulate/observe.py", "simulate/data.py", "core/cache.py", "runs/records.py"):
         assert rel in run, f"a run's key leaves out {rel}"
     assert "core/errors.py" not in run and "core/progress.py" not in run, "exempt: they cannot change a record"
     mujoco = set(cache.closure(cache.PRODUCERS["dataset-mujoco"][0]))

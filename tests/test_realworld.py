@@ -12,9 +12,10 @@ import pytest
 
 from study.book import results
 from study.core.errors import ConfigError, DataError
-from study.experiments import paper, realworld
-from study.experiments.runner import Recommendation
-from study.experiments.text import Table
+from study.runs import paper
+from study.chapters import realworld
+from study.runs.runner import Recommendation
+from study.report.text import Table
 from study.learn.metrics import Interval
 from study.see import render
 from study.simulate import synth

@@ -13,7 +13,7 @@ from typing import Literal
 from study import cli
 from study.book import results
 from study.core.errors import ConfigError, DataError
-from study.experiments import reported, text, verdicts
+from study.report import reported, text, verdicts
 from study.learn.metrics import Interval, at_chance, bootstrap_accuracy, wilson
 
 
@@ -186,7 +186,7 @@ def test_rebuild_check_writes_table1_on_the_other_backend(tmp_path, monkeypatch)
     import sys
     from pathlib import Path
 
-    from study import experiments
+    from study import runs as experiments
 
     cfg = experiments.preset("smoke").base_config()
     mean = reported.number(Interval(0.6, 0.5, 0.7, "x"), "mean", config=dataclasses.asdict(cfg))

@@ -8,7 +8,7 @@ import json
 import pytest
 import torch
 
-from study.experiments import runs, schedule
+from study.runs import records, schedule
 from study.learn import native, stack
 from study.learn.config import TrainConfig
 
@@ -22,9 +22,9 @@ OTHERS = [dataclasses.replace(SMOKE, seed=s, lr=lr, dropout=d, max_epochs=e, min
 
 def _records(smoke_dataset, cfgs, tmp_path, name) -> list[dict]:
     jobs = [(smoke_dataset, c, True) for c in cfgs]
-    out = runs.train_stack(jobs, tmp_path / name)
+    out = records.train_stack(jobs, tmp_path / name)
     for rec in out:
-        assert json.loads(runs.record_path(tmp_path / name, rec["key"]).read_text()) == rec, "written as returned"
+        assert json.loads(records.record_path(tmp_path / name, rec["key"]).read_text()) == rec, "written as returned"
     return [{k: v for k, v in r.items() if k != "train_seconds"} for r in out]
 
 
@@ -88,7 +88,7 @@ def test_a_planned_build_stops_a_chapter_at_runs_not_trained_yet(smoke_dataset, 
         schedule.ask(jobs[:1], data)  # asked twice: listed once
     asked = schedule.pending(pending)
     assert [(c, t) for _, c, t in asked] == [(c, t) for _, c, t in jobs]
-    fake = {"key": runs.run_key(ds, SMOKE, True), "config": dataclasses.asdict(SMOKE)}
-    runs.record_path(data, fake["key"]).parent.mkdir(parents=True)
-    runs.record_path(data, fake["key"]).write_text(json.dumps(fake))
+    fake = {"key": records.run_key(ds, SMOKE, True), "config": dataclasses.asdict(SMOKE)}
+    records.record_path(data, fake["key"]).parent.mkdir(parents=True)
+    records.record_path(data, fake["key"]).write_text(json.dumps(fake))
     schedule.ask(jobs[:1], data)  # trained now: it passes

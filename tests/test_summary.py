@@ -11,8 +11,8 @@ import matplotlib.pyplot as plt
 import pytest
 
 from study.book import figures, summary
-from study.experiments import verdicts
-from study.experiments.reported import Verdict, number
+from study.report import verdicts
+from study.report.reported import Verdict, number
 from study.learn.metrics import Interval
 
 

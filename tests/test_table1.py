@@ -9,7 +9,9 @@ import pytest
 
 from fake_runs import cache_models, cache_records
 from study.book import results
-from study.experiments import Runner, paper, table1, verdicts
+from study.runs import Runner, paper
+from study.chapters import table1
+from study.report import verdicts
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 

@@ -11,7 +11,7 @@ import pytest
 
 import model_toys
 from study import cli
-from study.experiments import realworld
+from study.chapters import realworld
 from study.core.errors import ConfigError, TrackingError, VideoError
 from study.learn import train
 from study.see import render, track, video

@@ -1,4 +1,4 @@
-"""The tracker's error taken apart (study.experiments.tracker): on series of known make, and end to end on renders."""
+"""The tracker's error taken apart (study.methods.tracker): on series of known make, and end to end on renders."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from study.experiments import tracker, videos
+from study.methods import tracker, videos
 from study.see import render
 from study.simulate import synth
 from study.see.gaps import rest_diameter

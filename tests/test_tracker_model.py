@@ -1,4 +1,4 @@
-"""The tracker's error model fitted to error series (``study.experiments.tracker_model``): on series drawn from the
+"""The tracker's error model fitted to error series (``study.methods.tracker_model``): on series drawn from the
 model itself the fit recovers the parameters they were drawn with; lost frames count only while the object is in
 view."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from study.core.errors import DataError
-from study.experiments import tracker_model
+from study.methods import tracker_model
 from study.simulate import observe
 from study.simulate.observe import TrackerNoise
 

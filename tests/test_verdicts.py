@@ -1,4 +1,4 @@
-"""The book's one verdict rule (study.experiments.verdicts): a number against the paper's, a claimed order, the
+"""The book's one verdict rule (study.report.verdicts): a number against the paper's, a claimed order, the
 kinds without a number, combining, and deciding a stored decision again at any margin."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import json
 import pytest
 
 from study.core.errors import ConfigError
-from study.experiments import verdicts
+from study.report import verdicts
 from study.learn.metrics import Interval
 
 

@@ -7,8 +7,10 @@ A reproduction of Fathollahi & Kasturi, arXiv:1609.00361, as a package in three 
 - ``study.learn``: the paper's peephole LSTM (with its compiled time loops), training, evaluation,
   frame-by-frame streaming and a physics baseline.
 - ``study.see``: video files, MuJoCo renders with ground truth, and the colour tracker.
-- On top: ``study.experiments`` (the runs behind every table and figure), ``study.experiments.realworld`` (the
-  video experiment), ``study.book`` (papermill and Jupyter Book) and ``study.cli`` (the command).
+- On top: ``study.runs`` (training what chapters ask for, cached), ``study.methods`` (what two or more
+  chapters share: learners, camera conditions, the tracker's error), ``study.report`` (verdicts, numbers,
+  tables), ``study.chapters`` (one module per page of the book), ``study.book`` (papermill and Jupyter Book)
+  and ``study.cli`` (the command).
 
 Every module is imported on demand, so ``import study`` stays cheap, and the modules users reach for
 have short names: ``from study import synth, train, track`` is ``study.simulate.synth`` and so on.
@@ -32,7 +34,10 @@ SHORT_NAMES: dict[str, str] = {
     **{m: f"study.learn.{m}" for m in ("config", "metrics", "model", "native", "gru", "train", "stream", "baseline",
                                         "rocket")},
     **{m: f"study.see.{m}" for m in ("video", "render", "track")},
-    **{m: f"study.experiments.{m}" for m in ("cues", "realworld", "decide", "table1", "verdicts", "text")},
+    **{m: f"study.chapters.{m}" for m in ("cues", "realworld", "decision", "table1", "motion", "length", "engine",
+                                          "baselines")},
+    "decide": "study.chapters.decision",
+    **{m: f"study.report.{m}" for m in ("verdicts", "text")},
     **{m: f"study.book.{m}" for m in ("results", "figures", "publish")},
 }
 """``study.<short>`` -> the module it names, for ``from study import synth`` and friends."""

@@ -368,8 +368,8 @@ def _add_results(sub: argparse._SubParsersAction) -> None:
 
     def run(a: argparse.Namespace) -> int:
         from study.book import results
-        from study.experiments.reported import Verdict
-        from study.experiments.text import fmt, fmt_value
+        from study.report.reported import Verdict
+        from study.report.text import fmt, fmt_value
 
         mine = results.load(a.file)
         if a.compare is None:

@@ -39,8 +39,8 @@ from study.core.cache import canonical_json, key, source_hash, write_text_atomic
 from study.core.errors import ChapterError, ConfigError, check_writable
 from study.core.progress import ENV as PROGRESS_ENV
 from study.core.progress import Follower
-from study.experiments import cluster
-from study.experiments.cluster import DEVICE_ENV, PLAN_ENV
+from study.runs import cluster
+from study.runs.cluster import DEVICE_ENV, PLAN_ENV
 
 RUNTIME = ("scheduler",)
 """Parameters that say where a chapter's work runs, not what it computes: injected into the chapters that
@@ -88,7 +88,7 @@ class Chapter:
 
     @property
     def plan_part(self) -> Path:
-        """The training runs this chapter asked for in its last run (``study.experiments.schedule.Plan``)."""
+        """The training runs this chapter asked for in its last run (``study.runs.schedule.Plan``)."""
         return self.root / EXECUTED / "plans" / f"{self.entry}.jsonl"
 
     @property
@@ -351,7 +351,7 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
 
 
 class _Pending(Exception):
-    """A chapter stopped at runs not trained yet (``study.experiments.schedule.Pending``)."""
+    """A chapter stopped at runs not trained yet (``study.runs.schedule.Pending``)."""
 
 
 def _keep_failed(ch: Chapter, running: Path) -> None:
@@ -404,7 +404,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     current copies, but a chapter that has no executed copy at all is always executed.
 
     **One plan for the build.** The chapters to execute run in rounds. In each, a chapter that asks for runs not
-    trained yet writes them down and stops (``study.experiments.schedule.ask``); once every chapter has run or
+    trained yet writes them down and stops (``study.runs.schedule.ask``); once every chapter has run or
     stopped, the union of what they asked for is trained at once, in stacks, longest first, on every core
     (``workers``, 0: one per CPU) or the Dask ``scheduler``, on ``device``, and the stopped chapters run again. A
     round is a stage of the plan: the runs that depend on earlier results (Table 1's configuration is the grid's
@@ -481,7 +481,7 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
                  stages: list, done: list, tmp: Path, scheduler: str, device: str, workers: int) -> None:
     """Execute the chapters of ``todo`` in rounds (see :func:`execute`), training each round's runs at once; the
     chapters that run last wait until every other chapter is done."""
-    from study.experiments import schedule  # torch: only a build that executes a chapter loads it
+    from study.runs import schedule  # torch: only a build that executes a chapter loads it
 
     rest = [t for t in todo if t[1] not in last]
     final = [t for t in todo if t[1] in last]
@@ -552,7 +552,7 @@ def _environment(values: dict[str, str]) -> Iterator[None]:
 
 def plan_totals(root: Path) -> dict[str, float]:
     """The distinct models the book's chapters train (``models``) and the CPU seconds their records took
-    (``train_seconds``), from each chapter's plan part (``study.experiments.cluster.plan_totals``)."""
+    (``train_seconds``), from each chapter's plan part (``study.runs.cluster.plan_totals``)."""
     return cluster.plan_totals([ch.plan_part for ch in chapters(root)])
 
 

@@ -13,10 +13,10 @@ from typing import Any
 import matplotlib as mpl
 from matplotlib.figure import Figure
 
-from study.experiments.cues import Bin, Point, Sweep
-from study.experiments import paper
-from study.experiments.runtable import Runs
-from study.experiments.stats import Summary
+from study.chapters.cues import Bin, Point, Sweep
+from study.runs import paper
+from study.runs.runtable import Runs
+from study.runs.stats import Summary
 
 # Okabe & Ito (2008), "Color Universal Design": distinguishable with every common colour deficiency.
 OKABE_ITO: dict[str, str] = {
@@ -67,7 +67,7 @@ def use_style() -> None:
 
 
 DIMS_NAMES = paper.DIMS_NAMES
-"""The inputs' names (their one home is ``study.experiments.paper``)."""
+"""The inputs' names (their one home is ``study.runs.paper``)."""
 DIMS_COLORS = {"xyz": OKABE_ITO["blue"], "z": OKABE_ITO["orange"]}
 """Colour of each input in every figure that compares them."""
 
@@ -75,10 +75,10 @@ DIMS_COLORS = {"xyz": OKABE_ITO["blue"], "z": OKABE_ITO["orange"]}
 def accuracy_vs_length(summary: Sequence[Summary], runs: Runs, long_summary: Sequence[Summary] = ()) -> Figure:
     """The paper's Figure 4, ours: test accuracy against input length, one panel per input (X, Y, Z; Z).
 
-    ``summary``: ``study.experiments.stats.summarise(runs, ("dims", "length"))`` (mean and 95 % interval,
+    ``summary``: ``study.runs.stats.summarise(runs, ("dims", "length"))`` (mean and 95 % interval,
     drawn as a line and a band); ``runs``: the single runs (dots; a cross for a run that failed to
     train); ``long_summary``: the long-memory variant's summary, drawn as open diamonds with error bars.
-    (``study.experiments.length.Sweep`` holds all three.)
+    (``study.chapters.length.Sweep`` holds all three.)
     """
     import matplotlib.pyplot as plt
 
@@ -114,7 +114,7 @@ def accuracy_vs_length(summary: Sequence[Summary], runs: Runs, long_summary: Seq
 
 def robustness_curves(points: Sequence[Point], sweeps: Mapping[str, Sweep], marks: Mapping[str, float],
                       groups: Mapping[str, str]) -> Figure:
-    """One panel per sweep of ``study.experiments.cues.robustness``: accuracy (mean, 95 % band) of each model group
+    """One panel per sweep of ``study.chapters.cues.robustness``: accuracy (mean, 95 % band) of each model group
     (``groups``: its key -> its legend) against the sweep's values, a dotted line at ``marks[sweep]`` (the
     calibrated or exact value)."""
     import matplotlib.pyplot as plt
@@ -138,7 +138,7 @@ def robustness_curves(points: Sequence[Point], sweeps: Mapping[str, Sweep], mark
 
 
 def accuracy_by_parameter(curves: Mapping[tuple[str, str], Sequence[Bin]], names: tuple[str, ...]) -> Figure:
-    """Accuracy against each throw parameter (``study.experiments.cues.by_parameter`` bins under
+    """Accuracy against each throw parameter (``study.chapters.cues.by_parameter`` bins under
     ``curves[(name, dims)]``), one panel per parameter, a line per class and input (solid X, Y, Z; dashed Z)."""
     import matplotlib.pyplot as plt
 
@@ -156,8 +156,8 @@ def accuracy_by_parameter(curves: Mapping[tuple[str, str], Sequence[Bin]], names
 
 
 def table1_runs(columns: Sequence[Any]) -> Figure:
-    """Table 1 of the paper, ours, every run: one column per row of ``study.experiments.table1.Table1.figure``
-    (a :class:`~study.experiments.table1.FigureRow` each), the paper's network left, beyond the paper right.
+    """Table 1 of the paper, ours, every run: one column per row of ``study.chapters.table1.Table1.figure``
+    (a :class:`~study.chapters.table1.FigureRow` each), the paper's network left, beyond the paper right.
 
     In each column a dot per run (seed), the data sets side by side; the run validation picks on each data set
     ringed in black, a cross for a run that failed to train; our estimate as a black diamond with its 95 %
@@ -216,7 +216,7 @@ def table1_runs(columns: Sequence[Any]) -> Figure:
 
 def methods_accuracy(rows: Sequence[Any]) -> Figure:
     """Every method of the chapter *What a practitioner would try first* on the same test split: one row per
-    method (``study.experiments.baselines.Baselines.figure``), its mean test accuracy with the 95 % interval in
+    method (``study.chapters.baselines.Baselines.figure``), its mean test accuracy with the 95 % interval in
     each (input, positions) condition (X, Y, Z exact: filled circle; Z exact: filled square; Z observed by the
     calibrated tracker: open square)."""
     import matplotlib.pyplot as plt
@@ -351,7 +351,7 @@ def what_the_motion_allows(allows: Any) -> Figure:
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
-    from study.experiments.motion import SHOWN
+    from study.chapters.motion import SHOWN
 
     colour = {k: _CYCLE[i] for i, k in enumerate(SHOWN)}
     heights = [len(p.conditions) + 1.3 for p in allows.panels]
@@ -403,7 +403,7 @@ def sample_trajectories(times: Any, x: Any, samples: Mapping[str, Sequence[int]]
 def learners_against_camera(curve: Any, ceiling_of: Any, learners: Sequence[str], names: Mapping[str, str]) -> Figure:
     """Accuracy (%) of each learner against the camera's error (mm, symmetric log scale), air on and off, with
     the exact ceiling dashed and chance dotted. ``curve(learner, air)`` gives (k,) errors in mm and k intervals
-    (``study.experiments.motion.Motion.curve``); ``ceiling_of(air)`` the ceiling, a fraction."""
+    (``study.chapters.motion.Motion.curve``); ``ceiling_of(air)`` the ceiling, a fraction."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.8), sharey=True)

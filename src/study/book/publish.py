@@ -1,14 +1,14 @@
 """One call that hands a chapter's typed result to its page and to the results file.
 
-A chapter's computation returns a frozen dataclass (``study.experiments.table1.Table1`` and the like) with a
-``numbers`` field, a :class:`~study.experiments.reported.Reported` tree of the numbers and verdicts it reports.
+A chapter's computation returns a frozen dataclass (``study.chapters.table1.Table1`` and the like) with a
+``numbers`` field, a :class:`~study.report.reported.Reported` tree of the numbers and verdicts it reports.
 ``publish(result)``, the chapter's one hidden line:
 
 - glues every number and verdict of ``result.numbers`` under its name less the chapter's
   (``table1.xyz.paper_way`` as ``xyz.paper_way``), formatted as the book writes it (``70.8 % [69.6, 72.0]``),
   and a number's verdict, if it has one, as ``xyz.paper_way.verdict``;
 - glues every other field and public property of ``result`` that is text (a sentence the result builds), a
-  :class:`~study.experiments.text.Table` or :class:`~study.experiments.text.Bullets` (as Markdown) or a plain number (raw, so the page may format it:
+  :class:`~study.report.text.Table` or :class:`~study.report.text.Bullets` (as Markdown) or a plain number (raw, so the page may format it:
   ``{glue:text}`n_params:d```); figure data, configs and run tables are left to the page's visible code;
 - writes the numbers to the chapter's part of the results file when the book builder runs the chapter
   (``study.book.results.write_part``).
@@ -26,8 +26,8 @@ from typing import Any
 
 from study.book import results
 from study.core.errors import ConfigError
-from study.experiments.reported import Leaf, Number, Reported
-from study.experiments.text import Bullets, Table, fmt
+from study.report.reported import Leaf, Number, Reported
+from study.report.text import Bullets, Table, fmt
 
 
 def glued(result: Any) -> Iterator[tuple[str, Any]]:

@@ -5,7 +5,7 @@ Each chapter publishes its typed result (``study.book.publish``); when the book 
 sets :data:`ENV` to a file of its own (its *part*), and the chapter's numbers are written there
 (:func:`write_part`). The builder merges the parts of the book's chapters into one file,
 ``_build/results.json`` (:func:`merge`), which the summary page reads back into the chapters' own types
-(``study.experiments.reported.Reported.read``) and ``study results --compare OTHER`` compares with another
+(``study.report.reported.Reported.read``) and ``study results --compare OTHER`` compares with another
 build's (:func:`compare`). A chapter run by hand, outside the builder, writes nothing.
 
 The file (:data:`FORMAT`)::
@@ -15,7 +15,7 @@ The file (:data:`FORMAT`)::
                   "decision", "source", "signed"}, ...],
      "verdicts": [{"name", "chapter", "what", "verdict", "decision", "source"}, ...]}
 
-``decision`` is a verdict's stored form (``study.experiments.verdicts``), from which it can be decided again
+``decision`` is a verdict's stored form (``study.report.verdicts``), from which it can be decided again
 (:func:`recompute`). Files of the first format (``study.results/1``, verdicts among the numbers with
 ``unit = "verdict"``) still load.
 """
@@ -33,8 +33,8 @@ from typing import Any
 
 from study.core.cache import write_text_atomic
 from study.core.errors import ConfigError, DataError, check_file
-from study.experiments import verdicts
-from study.experiments.reported import Leaf, Number, Verdict
+from study.report import verdicts
+from study.report.reported import Leaf, Number, Verdict
 
 FORMAT = "study.results/2"
 """The results file's format."""

@@ -13,8 +13,8 @@ import torch
 
 import study
 from study.core.cache import source_hash
-from study.experiments.reported import Reported
-from study.experiments.text import Table
+from study.report.reported import Reported
+from study.report.text import Table
 from study.learn import native
 
 

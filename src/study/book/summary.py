@@ -15,34 +15,35 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from study.book import results
-from study.experiments import (baselines, cues, decide, engines, length, motion, paper, realworld, table1, throws,
-                               verdicts)
+from study.chapters import baselines, cues, decision, engine, length, motion, realworld, table1, data
+from study.runs import paper
+from study.report import verdicts
 from study.core.errors import StudyError
-from study.experiments.reported import Leaf, Number, Reported, Verdict
-from study.experiments.text import Bullets, Table, fmt, fmt_value, pct
+from study.report.reported import Leaf, Number, Reported, Verdict
+from study.report.text import Bullets, Table, fmt, fmt_value, pct
 
 
 @dataclass(frozen=True)
 class Chapters:
     """Every chapter's numbers, as its own type reads them back from the results file."""
 
-    data: throws.Numbers
+    data: data.Numbers
     table1: table1.Numbers
     cues: cues.Numbers
     motion: motion.Numbers
-    engine: engines.Numbers
+    engine: engine.Numbers
     length: length.Numbers
     realworld: realworld.Numbers
-    decision: decide.Numbers
+    decision: decision.Numbers
     baselines: baselines.Numbers
 
     @classmethod
     def read(cls, leaves: dict[str, Leaf]) -> Chapters:
         """Each chapter's tree from ``leaves`` (``study.book.results.load``); ``MissingResult`` names the chapter of
         a number that is not there."""
-        return cls(throws.Numbers.read(leaves), table1.Numbers.read(leaves), cues.Numbers.read(leaves),
-                   motion.Numbers.read(leaves), engines.Numbers.read(leaves), length.Numbers.read(leaves),
-                   realworld.Numbers.read(leaves), decide.Numbers.read(leaves), baselines.Numbers.read(leaves))
+        return cls(data.Numbers.read(leaves), table1.Numbers.read(leaves), cues.Numbers.read(leaves),
+                   motion.Numbers.read(leaves), engine.Numbers.read(leaves), length.Numbers.read(leaves),
+                   realworld.Numbers.read(leaves), decision.Numbers.read(leaves), baselines.Numbers.read(leaves))
 
 
 @dataclass(frozen=True)
@@ -351,7 +352,7 @@ class Condition:
     label: str
     """The condition, in words."""
     accuracy: Mapping[str, Number]
-    """Learner (``study.experiments.motion.NAMES``) -> its test accuracy there."""
+    """Learner (``study.chapters.motion.NAMES``) -> its test accuracy there."""
     best: str | None
     """The condition's best learner, None where the chapter names none."""
 

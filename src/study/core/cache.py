@@ -137,16 +137,16 @@ NON_PYTHON: dict[str, tuple[str, ...]] = {
 }
 """Source files that a module builds from rather than imports (the compiled time loops), hashed with it."""
 PRODUCERS: dict[str, tuple[str, tuple[str, ...]]] = {
-    "run": ("study.experiments.runs", ()),
+    "run": ("study.runs.records", ()),
     "dataset-mujoco": ("study.simulate.mujoco_sim", ("simulate/synth.py",)),
     "dataset-bullet": ("study.simulate.bullet", ("simulate/synth.py",)),
-    "video": ("study.experiments.videos", ()),
-    "tracker-error": ("study.experiments.tracker", ()),
-    "minirocket": ("study.experiments.rockets", ()),
+    "video": ("study.methods.videos", ()),
+    "tracker-error": ("study.methods.tracker", ()),
+    "minirocket": ("study.methods.rockets", ()),
 }
 """Each cached product: the module whose function makes it, whose import closure its key hashes
 (:func:`code_hash`), and files hashed with that closure but not followed. Runs and their models: the record a
-run writes (``study.experiments.runs``) and the training behind it. A data set: its engine's simulation, and the
+run writes (``study.runs.records``) and the training behind it. A data set: its engine's simulation, and the
 module that chooses the engine and writes the file (``simulate/synth.py``, which imports both engines: its own
 source is hashed, not the other engine's)."""
 

@@ -7,7 +7,7 @@ given instead, in the same shape and units, seeded by the ``rng`` it is handed:
 
 - :func:`noise`: white Gaussian position error of a given size;
 - :func:`tracker_noise`: the tracker's error as :class:`TrackerNoise` models it (fitted on rendered video,
-  ``study.experiments.tracker_model``): a per-throw offset plus noise correlated from frame to frame, of one size in
+  ``study.methods.tracker_model``): a per-throw offset plus noise correlated from frame to frame, of one size in
   flight and another while the object touches the ground (:func:`in_contact`); white noise is its special case;
 - :func:`drop`: frames the tracker loses (motion blur, occlusion), filled as the tracker fills them
   (:func:`fill_runs`: linear interpolation over short gaps);

@@ -29,11 +29,13 @@ from typing import Literal
 
 import numpy as np
 
-from study.experiments import paper, stats, verdicts
-from study.experiments.reported import Number, Reported, Verdict, count, named, number
-from study.experiments.runner import Runner
-from study.experiments.runtable import Fitted, Run, Runs
-from study.experiments.text import Table, pct, pct_ci, pct_pm, points, runs_note, seeds_ci
+from study.runs import paper, stats
+
+from study.report import verdicts
+from study.report.reported import Number, Reported, Verdict, count, named, number
+from study.runs.runner import Runner
+from study.runs.runtable import Fitted, Run, Runs
+from study.report.text import Table, pct, pct_ci, pct_pm, points, runs_note, seeds_ci
 from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
 from study.learn.inputs import rotated
 from study.learn.metrics import (PLATEAU_LOSS, Interval, between_share, bootstrap_accuracy, bootstrap_difference,

@@ -43,15 +43,16 @@ from typing import TYPE_CHECKING, Literal, Protocol
 import numpy as np
 
 from study.core.errors import ConfigError
-from study.experiments import motion, stats
-from study.experiments.reported import Number, Reported, count, named, number
-from study.experiments.text import Table, fmt, pct, pct_ci
+from study.chapters import motion
+from study.runs import stats
+from study.report.reported import Number, Reported, count, named, number
+from study.report.text import Table, fmt, pct, pct_ci
 from study.learn.config import Inputs, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, wilson
 from study.simulate import synth
 
 if TYPE_CHECKING:  # a type only: the chapter passes a runner in
-    from study.experiments.runner import Runner
+    from study.runs.runner import Runner
 
 
 def _check(p: np.ndarray, y: np.ndarray, what: str = "probabilities") -> tuple[np.ndarray, np.ndarray]:

@@ -24,12 +24,15 @@ from typing import Literal, get_args
 import numpy as np
 
 from study import CLASSES
-from study.experiments import ceiling, motion, paper, stats, verdicts
-from study.experiments.reported import Number, Reported, count, number
-from study.experiments.runner import Runner
-from study.experiments.runtable import Runs
-from study.experiments.text import Table, pct, pct_ci, points, seeds_ci
-from study.experiments.tracker import TrackerError
+from study.methods import ceiling
+from study.chapters import motion
+from study.runs import paper, stats
+from study.report import verdicts
+from study.report.reported import Number, Reported, count, number
+from study.runs.runner import Runner
+from study.runs.runtable import Runs
+from study.report.text import Table, pct, pct_ci, points, seeds_ci
+from study.methods.tracker import TrackerError
 from study.learn.config import Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.simulate import bullet, measure, observe, synth
@@ -37,7 +40,7 @@ from study.simulate.data import Dataset
 from study.simulate.synth import ENGINES, ClassPrior, Engine, SynthConfig
 
 Learner = Literal["peephole_positions", "peephole_velocity", "minirocket", "rule"]
-"""The learners of the cross-engine table (named as in ``study.experiments.motion``)."""
+"""The learners of the cross-engine table (named as in ``study.chapters.motion``)."""
 Network = Literal["peephole_positions", "peephole_velocity"]
 """Its networks."""
 View = Literal["exact", "calibrated"]

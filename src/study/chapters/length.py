@@ -8,7 +8,7 @@
 2. whether accuracy falls at the longest input: the longest minus the best length, paired on the test throws,
    against the paper's claim that it falls (:func:`drops`);
 3. what the shortest windows hold: the one-feature rules of the data chapter on exactly the window the network
-   sees (``study.experiments.cues.window_cues``);
+   sees (``study.chapters.cues.window_cues``);
 4. the paper's explanation (vanishing or exploding gradients), one factor at a time at the longest input:
    truncation (Table 1's, or the whole input) x the forget gates' start (constant, or chrono), and the share of
    test objects still moving in the input's last frames (:func:`factorial`, :func:`still_moving`).
@@ -26,12 +26,16 @@ from typing import Any, Literal
 
 import numpy as np
 
-from study.experiments import cues, paper, stats, verdicts
-from study.experiments.reported import Number, Reported, Verdict, count, named, number
-from study.experiments.runner import Runner
-from study.experiments.runtable import Runs
-from study.experiments.stats import LongInputEffect, Summary
-from study.experiments.text import Table, pct_ci, points, runs_note, seeds_ci
+from study.chapters import cues
+
+from study.runs import paper, stats
+
+from study.report import verdicts
+from study.report.reported import Number, Reported, Verdict, count, named, number
+from study.runs.runner import Runner
+from study.runs.runtable import Runs
+from study.runs.stats import LongInputEffect, Summary
+from study.report.text import Table, pct_ci, points, runs_note, seeds_ci
 from study.learn.config import Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.simulate import measure

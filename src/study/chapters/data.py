@@ -28,10 +28,10 @@ from typing import Literal
 import numpy as np
 
 from study import CLASSES
-from study.experiments import verdicts
-from study.experiments.reported import Number, Reported, Verdict, named, number
-from study.experiments.stats import mean_difference
-from study.experiments.text import Table, pct, pct_ci
+from study.report import verdicts
+from study.report.reported import Number, Reported, Verdict, named, number
+from study.runs.stats import mean_difference
+from study.report.text import Table, pct, pct_ci
 from study.learn.metrics import bootstrap_accuracy
 from study.see import render
 from study.simulate import checks, contact, measure, synth

@@ -30,8 +30,8 @@ import torch
 
 from study.core.errors import StudyError
 from study.core.progress import Progress
-from study.experiments.cluster import PLAN_ENV, default_workers, local_cluster
-from study.experiments.runs import cached, record_path, run_key, train_stack
+from study.runs.cluster import PLAN_ENV, default_workers, local_cluster
+from study.runs.records import cached, record_path, run_key, train_stack
 from study.learn import native, stack
 from study.learn.train import TrainConfig
 from study.simulate import data
@@ -64,7 +64,7 @@ def _dataset_at(path: str) -> Dataset:
 
 def stack_task(members: Sequence[tuple[Dataset | str, TrainConfig, bool, str]], data_dir: str,
                device: str = "cpu") -> list[dict[str, Any]]:
-    """What a worker runs: ``study.experiments.runs.train_stack`` of ``members`` (dataset or its file, config, test
+    """What a worker runs: ``study.runs.records.train_stack`` of ``members`` (dataset or its file, config, test
     flag, the submitter's key), after checking that it computes each submitter's key.
 
     A dataset is the dataset itself (a Dask worker gets it scattered once) or the path of its file (a local pool's

@@ -57,7 +57,7 @@ class Run:
 
     @classmethod
     def from_record(cls, rec: Mapping[str, Any], test_y: np.ndarray, **labels: Any) -> Run:
-        """The run of a record of ``study.experiments.runs.run``; ``test_y`` (n,) the test labels it was scored on."""
+        """The run of a record of ``study.runs.records.run``; ``test_y`` (n,) the test labels it was scored on."""
         test = rec.get("test")
         correct = accuracy = None
         per_class: dict[str, float] = {}

@@ -29,9 +29,9 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from study.core.errors import DataError
-from study.experiments.reported import Number, Reported, count, number
-from study.experiments import tracker
-from study.experiments.videos import Video
+from study.report.reported import Number, Reported, count, number
+from study.methods import tracker
+from study.methods.videos import Video
 from study.learn.metrics import Interval
 from study.see import render
 from study.see.config import TrackConfig
@@ -74,7 +74,7 @@ class ErrorSeries:
 
 def series_of(videos: Sequence[Video], cfg: TrackConfig | None = None) -> list[ErrorSeries]:
     """The error series of the ``videos`` that have ground truth (rendered ones; the others are skipped): each
-    tracked end to end as the classifier's input is (``study.experiments.tracker.track_rendered``: heights from the
+    tracked end to end as the classifier's input is (``study.methods.tracker.track_rendered``: heights from the
     render's camera at the object's depth), against the true centre's height; in view where the true centre
     projects inside the picture."""
     out = []

@@ -14,7 +14,7 @@ from typing import Any
 
 PLAN_ENV = "STUDY_PLAN_PART"
 """Environment variable naming the file where a chapter's runs are listed (set by ``study book``; written by
-``study.experiments.schedule.Plan``)."""
+``study.runs.schedule.Plan``)."""
 
 
 DEVICE_ENV = "STUDY_DEVICE"

@@ -30,10 +30,10 @@ from typing import Any, Literal
 import numpy as np
 import torch
 
-from study.experiments import verdicts
-from study.experiments.reported import Number, Reported, Verdict, named, number
-from study.experiments.runner import Runner
-from study.experiments.text import Table, points, seeds_ci
+from study.report import verdicts
+from study.report.reported import Number, Reported, Verdict, named, number
+from study.runs.runner import Runner
+from study.report.text import Table, points, seeds_ci
 from study.learn import baseline, train
 from study.learn.config import Cell, Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference

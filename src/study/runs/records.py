@@ -7,7 +7,7 @@ whether the test split was scored, the code that makes a record (this module's i
 (compiled for this CPU, or PyTorch's) and the device. It is written atomically, so a rebuild never retrains a
 run whose inputs did not change, and a run trained anywhere that shares ``data_dir`` is a hit everywhere. Its
 kept model lies in :func:`model_dir`. :func:`train_stack` trains several runs of one shape as one stack
-(``study.learn.stack``), each writing the record it would write alone; ``study.experiments.schedule`` decides
+(``study.learn.stack``), each writing the record it would write alone; ``study.runs.schedule`` decides
 which runs train where.
 
 """

@@ -6,7 +6,7 @@ those cues a classifier uses, with Table 1's protocol and configuration (no new 
 
 1. the drag cue (:func:`drag_cue`): the first fall's vertical acceleration, one threshold on it, and the same
    threshold under tracker noise;
-2. the tracker's error on rendered video (``Runner.tracker_error``, ``study.experiments.tracker``);
+2. the tracker's error on rendered video (``Runner.tracker_error``, ``study.methods.tracker``);
 3. four conditions (:func:`conditions`): (a) exact positions with air, (b) the same throws without air, (c)
    Table 1's Z models tested as observed, (d) Z models trained on random observations; the one-feature rules
    (:func:`rules`) on the same input; the fitted ceiling (:func:`ceiling`); whether the network beats the best
@@ -14,7 +14,7 @@ those cues a classifier uses, with Table 1's protocol and configuration (no new 
 4. accuracy against each parameter of the observation model (:func:`robustness`);
 5. accuracy against each throw's restitution, mass and friction (:func:`by_parameter`, :func:`overlap`);
 6. other shapes (:func:`shape_sets`, :func:`mixed_shapes`, :func:`shape_scores`);
-7. the exact ceiling of the priors (``study.experiments.ceiling``).
+7. the exact ceiling of the priors (``study.methods.ceiling``).
 
 :class:`Numbers` is what the chapter reports (``cues.drag_rule.exact`` and so on); ``study.book.publish`` glues
 the rest of :class:`Cues` (its sentences and tables).
@@ -31,15 +31,16 @@ from typing import Any, Literal
 import numpy as np
 
 from study.core import cache
-from study.experiments import paper, verdicts
-from study.experiments.ceiling import exact_ceiling
-from study.experiments.reported import Leaf, Number, Reported, Verdict, named, number
-from study.experiments.runner import Runner
-from study.experiments.runtable import Runs
-from study.experiments.stats import scored
-from study.experiments.text import Table, pct_ci, seeds_ci
-from study.experiments.tracker import LABELS, Decomposition, TrackerError
-from study.experiments.tracker_model import TrackerFit, TrackerFitNumbers
+from study.runs import paper
+from study.report import verdicts
+from study.methods.ceiling import exact_ceiling
+from study.report.reported import Leaf, Number, Reported, Verdict, named, number
+from study.runs.runner import Runner
+from study.runs.runtable import Runs
+from study.runs.stats import scored
+from study.report.text import Table, pct_ci, seeds_ci
+from study.methods.tracker import LABELS, Decomposition, TrackerError
+from study.methods.tracker_model import TrackerFit, TrackerFitNumbers
 from study.learn import baseline
 from study.learn.config import Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
@@ -84,7 +85,7 @@ class DragRuleNumbers(Reported):
 @dataclass(frozen=True)
 class DecomposedNumbers(Reported):
     """One tracker's height error on the book's rendered throws, taken apart
-    (:class:`~study.experiments.tracker.Decomposition`)."""
+    (:class:`~study.methods.tracker.Decomposition`)."""
 
     bias: Number
     offset: Number
@@ -113,7 +114,7 @@ DECOMPOSED: dict[str, tuple[str, str, float]] = {
                          "rest), median removed", 1e-3),
     "lost": ("lost", "share of the frames in view the tracker lost", 1.0),
 }
-"""Each decomposed number: the :class:`~study.experiments.tracker.Decomposition` field, what it is, the factor to SI
+"""Each decomposed number: the :class:`~study.methods.tracker.Decomposition` field, what it is, the factor to SI
 units (metres, m/s; a correlation and a share as they are)."""
 UNITS = {"rho": "correlation", "velocity": "m/s", "lost": "fraction"}
 
@@ -126,7 +127,7 @@ def _decomposed(d: Decomposition, which: str) -> DecomposedNumbers:
 
 @dataclass(frozen=True)
 class TrackerNumbers(Reported):
-    """The tracker's error on rendered video (:class:`~study.experiments.tracker.TrackerError`)."""
+    """The tracker's error on rendered video (:class:`~study.methods.tracker.TrackerError`)."""
 
     noise_m: Number
     """Its vertical error, metres."""
@@ -145,7 +146,7 @@ class CeilingNumbers(Reported):
     with_mass: Number
     """The same, told the mass too."""
     exact: Number
-    """The exact ceiling of the priors on restitution and friction (``study.experiments.ceiling``)."""
+    """The exact ceiling of the priors on restitution and friction (``study.methods.ceiling``)."""
 
 
 @dataclass(frozen=True)

@@ -81,7 +81,7 @@ def pct_ci(interval: Any, digits: int = 1) -> str:
 
 def runs_note(summary: Any) -> str:
     """``''``, or ``'2 of 5 failed to train, 1 diverged, 1 at the epoch cap'`` for a
-    ``study.experiments.stats.Summary``."""
+    ``study.runs.stats.Summary``."""
     parts = []
     if summary.failed:
         parts.append(f"{summary.failed} of {summary.n} failed to train")
@@ -114,7 +114,7 @@ def fmt_value(value: float, unit: str = "fraction") -> str:
 def fmt(leaf: Any) -> str:
     """A reported number with its interval, ``'81.2 % [79.9, 82.4]'`` (no interval for an exact number; a
     difference with its sign, in points for fractions); a verdict, its word."""
-    if not hasattr(leaf, "value"):  # a study.experiments.reported.Verdict
+    if not hasattr(leaf, "value"):  # a study.report.reported.Verdict
         return leaf.verdict
     if leaf.lo == leaf.hi == leaf.value:
         return fmt_value(leaf.value, leaf.unit)

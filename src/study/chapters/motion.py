@@ -4,7 +4,7 @@ ceiling of the priors.
 The chapter's table has a row per learner and a column per condition (:class:`Column`): the air on or off, and
 the positions exact or observed by a camera whose error is white noise of one pixel of a 1080-row camera at 4 m,
 the tracker's error as its fitted model draws it (``Runner.observation``: a per-throw offset and correlated noise,
-one level in flight and another in contact, ``study.experiments.tracker_model``), or white noise of one pixel of the
+one level in flight and another in contact, ``study.methods.tracker_model``), or white noise of one pixel of the
 same camera at 55 m (with the tracker's share of lost frames in every observed column). Each learner is trained
 on the condition it is tested on:
 
@@ -31,11 +31,11 @@ from typing import Literal, get_args
 
 import numpy as np
 
-from study.experiments import ceiling
-from study.experiments.reported import Number, Reported, count, named, number
-from study.experiments.runner import Runner
-from study.experiments.text import Table, pct, pct_ci, seeds_ci
-from study.experiments.tracker import TrackerError
+from study.methods import ceiling
+from study.report.reported import Number, Reported, count, named, number
+from study.runs.runner import Runner
+from study.report.text import Table, pct, pct_ci, seeds_ci
+from study.methods.tracker import TrackerError
 from study.learn import baseline
 from study.learn.config import TrainConfig
 from study.learn.inputs import observe_fields
@@ -161,7 +161,7 @@ def columns(calibrated: observe.Observation | TrackerError) -> list[Column]:
 
 
 def column_ceiling(cfg: SynthConfig, column: Column) -> float:
-    """The exact ceiling of a column (``study.experiments.ceiling``): with air, told the mass (which drag makes
+    """The exact ceiling of a column (``study.methods.ceiling``): with air, told the mass (which drag makes
     visible) as well as the restitution and friction; without, the restitution and friction."""
     return ceiling.exact_ceiling(cfg, AIR_ON_PARAMETERS if column.air else AIR_OFF_PARAMETERS)
 

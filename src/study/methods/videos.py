@@ -25,7 +25,7 @@ from study import CLASSES
 from study.core import cache
 from study.core.errors import ConfigError, DataError
 from study.core.progress import Progress
-from study.experiments.presets import preset
+from study.runs.presets import preset
 from study.see import render
 from study.simulate import synth
 

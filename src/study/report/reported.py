@@ -1,6 +1,6 @@
 """What a chapter reports, typed: numbers with their intervals, verdicts with their inputs, and their names.
 
-A chapter's computation (``study.experiments.table1.compute`` and the like) returns a frozen dataclass that
+A chapter's computation (``study.chapters.table1.compute`` and the like) returns a frozen dataclass that
 holds, among its other fields, a tree of :class:`Reported` dataclasses whose leaves are :class:`Number` (an
 estimate with its 95 % interval and what it is) and :class:`Verdict` (a decision that is not one number's).
 A leaf's name in the results file is its path in that tree, defined once, by the type: the field names
@@ -35,8 +35,8 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar, TypeVar
 
 from study.core.errors import ConfigError, StudyError
-from study.experiments import verdicts
-from study.experiments.verdicts import Decision, Margin
+from study.report import verdicts
+from study.report.verdicts import Decision, Margin
 from study.learn.metrics import Interval
 
 UNITS_WITHOUT_INTERVAL = ("count", "setting")
@@ -87,7 +87,7 @@ def number(value: Interval | float, what: str = "", *, unit: str = "fraction", p
            **source: Any) -> Number:
     """A :class:`Number` of an interval (or of a plain number, which has none).
 
-    With ``paper`` (a fraction), its verdict is :func:`study.experiments.verdicts.number` of ``paper``
+    With ``paper`` (a fraction), its verdict is :func:`study.report.verdicts.number` of ``paper``
     against the interval under ``margin``; or pass ``decision`` (an order, for a difference). A verdict is
     always decided here, from the interval, never given."""
     iv = value if isinstance(value, Interval) else Interval(float(value), float(value), float(value), "exact")

@@ -7,9 +7,9 @@ A chapter opens one runner and calls it::
     rows = runner.seed_runs(cfg)                         # Table 1: Z and X, Y, Z over the preset's seeds
 
 Every training run goes through :meth:`Runner.runs`, which reads cached records and trains the others
-(``study.experiments.schedule.run_all``: a local process pool, or a Dask cluster with ``scheduler``), and notes
-each run in the runner's :class:`~study.experiments.schedule.Plan`, so a build knows how many models it
-trained. The configurations of the paper's experiments are in ``study.experiments.paper``; Table 1's
+(``study.runs.schedule.run_all``: a local process pool, or a Dask cluster with ``scheduler``), and notes
+each run in the runner's :class:`~study.runs.schedule.Plan`, so a build knows how many models it
+trained. The configurations of the paper's experiments are in ``study.runs.paper``; Table 1's
 configuration is derived once, here (:meth:`Runner.table1_config`), for every chapter.
 """
 
@@ -27,12 +27,13 @@ from typing import Any
 import numpy as np
 
 from study.core import cache
-from study.experiments import paper, runs, schedule, tracker, tracker_model, videos
-from study.experiments.cluster import DEVICE_ENV
-from study.experiments.presets import Preset, preset
-from study.experiments.runtable import Fitted, Run, Runs
-from study.experiments.stats import scored
-from study.experiments.tracker import TrackerError
+from study.runs import paper, records, schedule
+from study.methods import tracker, tracker_model, videos
+from study.runs.cluster import DEVICE_ENV
+from study.runs.presets import Preset, preset
+from study.runs.runtable import Fitted, Run, Runs
+from study.runs.stats import scored
+from study.methods.tracker import TrackerError
 from study.learn import baseline, train
 from study.learn.config import Cell, Dims, Inputs, TrainConfig
 from study.learn.inputs import observe_fields
@@ -89,7 +90,7 @@ class Runner:
     device: str = "cpu"
     """Where runs train: 'cpu', or a torch device ('cuda'); part of every run's key."""
     plan: schedule.Plan = field(default_factory=schedule.Plan.from_env, compare=False, repr=False)
-    """Every run this runner was asked for (``study.experiments.schedule.Plan``)."""
+    """Every run this runner was asked for (``study.runs.schedule.Plan``)."""
 
     @classmethod
     def open(cls, preset_name: str, data_seed: int = 0, data_dir: str | Path = "data", *, workers: int = 0,
@@ -141,7 +142,7 @@ class Runner:
                           scheduler=self.scheduler or None, device=self.device)
 
     def rows(self, cfgs: list[TrainConfig], test: bool = True, desc: str = "runs") -> Runs:
-        """The runs of ``cfgs`` on this runner's dataset as a table (:class:`~study.experiments.runtable.Runs`)."""
+        """The runs of ``cfgs`` on this runner's dataset as a table (:class:`~study.runs.runtable.Runs`)."""
         y = self.dataset.test.y
         return Runs(Run.from_record(r, y) for r in self.runs(cfgs, test, desc))
 
@@ -154,11 +155,11 @@ class Runner:
     def trained(self, cfg: TrainConfig) -> train.TrainedModel:
         """The kept model of ``cfg`` on this dataset, trained first if no run has left it; in the plan either way,
         so the book's count of models does not depend on what the cache held."""
-        if not runs.model_dir(self.dataset, cfg, self.data_dir, self.device).is_dir():
+        if not records.model_dir(self.dataset, cfg, self.data_dir, self.device).is_dir():
             self.runs([cfg], test=False, desc="model")
         else:
             self.plan.add(self.dataset, cfg, self.data_dir, False, self.device)
-        return runs.trained(self.dataset, cfg, self.data_dir, self.device)
+        return records.trained(self.dataset, cfg, self.data_dir, self.device)
 
     def models(self, cfg: TrainConfig, seeds: tuple[int, ...], **changes: Any) -> list[train.TrainedModel]:
         """The kept models of ``cfg`` (with ``changes``) for each seed."""
@@ -251,13 +252,13 @@ class Runner:
         return error
 
     def tracker_error(self) -> TrackerError:
-        """The tracker's error on the rendered throws (``study.experiments.tracker.measure``), measured once per
+        """The tracker's error on the rendered throws (``study.methods.tracker.measure``), measured once per
         build and cached by the videos' key, the tracker's settings and the tracker's code."""
         return self._tracker_error
 
     def tracker_decomposition(self) -> dict[str, tracker.Decomposition]:
-        """The tracker's error on the rendered throws taken apart (``study.experiments.tracker.decompose``), for
-        each of :data:`study.experiments.tracker.TRACKERS` (the settings before and after the shaded faces)."""
+        """The tracker's error on the rendered throws taken apart (``study.methods.tracker.decompose``), for
+        each of :data:`study.methods.tracker.TRACKERS` (the settings before and after the shaded faces)."""
         rendered, _ = self.rendered()
         return {name: tracker.decompose(rendered, cfg) for name, cfg in tracker.TRACKERS.items()}
 
@@ -275,7 +276,7 @@ class Runner:
                                                      f"{DEVELOPMENT_RENDER_SEED}, not the book's {self.render_seed})")
 
     def tracker_fit(self) -> tracker_model.TrackerFit:
-        """The tracker's error model (``study.experiments.tracker_model.fit``: a per-throw offset, correlated noise, one
+        """The tracker's error model (``study.methods.tracker_model.fit``: a per-throw offset, correlated noise, one
         level in flight and one in contact) fitted on the development renders, tracked end to end."""
         return self._tracker_fit
 
@@ -324,8 +325,8 @@ class Runner:
     def rocket(self, dims: Dims, n_frames: int, seed: int, tests: dict[str, np.ndarray],
                train_x: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """MiniRocket's labels on each of ``tests``, fitted on this dataset's training split (or ``train_x``),
-        cached like a run (``study.experiments.rockets``)."""
-        from study.experiments.rockets import rocket_predictions
+        cached like a run (``study.methods.rockets``)."""
+        from study.methods.rockets import rocket_predictions
 
         return rocket_predictions(self.dataset, dims, n_frames, seed, tests, self.data_dir, train_x)
 

@@ -1,7 +1,7 @@
 """Summaries of runs: a mean, a spread and a 95 % interval per group of runs, and the questions the chapters ask
 of them.
 
-Runs are a :class:`~study.experiments.runtable.Runs` table; a run scored on the test split carries ``correct``,
+Runs are a :class:`~study.runs.runtable.Runs` table; a run scored on the test split carries ``correct``,
 (n,) bool, which test trajectories it got right, so intervals can resample both the test trajectories and the
 seeds.
 """
@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from study.core.errors import ConfigError
-from study.experiments.runtable import Run, Runs
+from study.runs.runtable import Run, Runs
 from study.learn.metrics import Interval, bootstrap_accuracy, hierarchical_bootstrap
 
 

@@ -8,16 +8,17 @@ import model_toys
 import numpy as np
 import pytest
 
-from study import experiments
+from study import runs
 from study.core import presets
 from study.core.errors import ConfigError
-from study.experiments import cluster, paper, runs, schedule, stats, text
-from study.experiments.runner import Runner
-from study.experiments.runtable import Run, Runs
+from study.runs import cluster, paper, records, schedule, stats
+from study.report import text
+from study.runs.runner import Runner
+from study.runs.runtable import Run, Runs
 from study.learn import train
 from study.learn.metrics import Interval, bootstrap_accuracy
 
-TINY = experiments.Preset(
+TINY = runs.Preset(
     name="tiny", length=0.5, lrs=(1e-2,), truncations=(5, 15), dropouts=(0.2,), batch_sizes=(8,),
     grid_seeds=(0, 1), seeds=(0, 1), lengths=(0.3, 0.5), length_seeds=(0,), max_epochs=1, patience=1, min_epochs=0,
     long_lengths=(0.5,), protocol_seeds=(0,),
@@ -86,9 +87,9 @@ def test_the_plan_counts_distinct_models_and_sums_their_training_time(tmp_path, 
     assert plan.n_models == 4
     plan.add(ds, dataclasses.replace(cfg, seed=9), tmp_path, test=True)  # one run more: one model more
     assert plan.n_models == 5
-    key = runs.run_key(ds, dataclasses.replace(cfg, seed=9), True)
-    runs.record_path(tmp_path, key).parent.mkdir(parents=True)
-    runs.record_path(tmp_path, key).write_text(json.dumps({"train_seconds": 2.5}))
+    key = records.run_key(ds, dataclasses.replace(cfg, seed=9), True)
+    records.record_path(tmp_path, key).parent.mkdir(parents=True)
+    records.record_path(tmp_path, key).write_text(json.dumps({"train_seconds": 2.5}))
     assert cluster.plan_totals([tmp_path / "plan.jsonl", tmp_path / "absent.jsonl"]) == {"models": 5.0, "train_seconds": 2.5}
 
 
@@ -109,35 +110,35 @@ def test_grid_is_chosen_by_the_mean_over_seeds_not_one_lucky_run():
 @pytest.mark.slow
 def test_test_run_scores_the_kept_model_of_the_same_run_without_test(tmp_path, ds, monkeypatch):
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
-    trained = runs.run(ds, cfg, tmp_path / "a", test=True)  # trained from scratch
-    runs.run(ds, cfg, tmp_path / "b", test=False)
+    trained = records.run(ds, cfg, tmp_path / "a", test=True)  # trained from scratch
+    records.run(ds, cfg, tmp_path / "b", test=False)
 
     def no_training(*a, **k):
         raise AssertionError("the kept model should have been scored, not retrained")
 
     monkeypatch.setattr(train, "fit", no_training)
-    scored = runs.run(ds, cfg, tmp_path / "b", test=True)
+    scored = records.run(ds, cfg, tmp_path / "b", test=True)
     assert scored["test"] == trained["test"] and scored["val_accuracy"] == trained["val_accuracy"]
     assert scored["key"] == trained["key"] and scored["history"] == trained["history"]
-    assert runs.cached(ds, cfg, tmp_path / "b", test=True) == scored
+    assert records.cached(ds, cfg, tmp_path / "b", test=True) == scored
 
 
 @pytest.mark.slow
 def test_run_record_and_key(tmp_path, ds):
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
-    rec = runs.run(ds, cfg, tmp_path)
+    rec = records.run(ds, cfg, tmp_path)
     saved = json.loads((tmp_path / "runs" / f"{rec['key']}.json").read_text())
     assert saved == rec and rec["test"]["n"] == 16 and len(rec["history"]) == rec["epochs_run"]
-    assert len(rec["test"]["p_heavy"]) == 16 and rec["format"] == runs.RUN_FORMAT
+    assert len(rec["test"]["p_heavy"]) == 16 and rec["format"] == records.RUN_FORMAT
     assert rec["failed"] in (True, False) and rec["diverged_epoch"] is None
-    keys = {runs.run_key(ds, cfg, True), runs.run_key(ds, cfg, False),
-            runs.run_key(ds, dataclasses.replace(cfg, seed=1), True),
-            runs.run_key(model_toys.dataset(n=16, T=20, key="other"), cfg, True)}
+    keys = {records.run_key(ds, cfg, True), records.run_key(ds, cfg, False),
+            records.run_key(ds, dataclasses.replace(cfg, seed=1), True),
+            records.run_key(model_toys.dataset(n=16, T=20, key="other"), cfg, True)}
     assert len(keys) == 4
-    tm = train.load(runs.model_dir(ds, cfg, tmp_path))  # the run left its model for reuse
+    tm = train.load(records.model_dir(ds, cfg, tmp_path))  # the run left its model for reuse
     assert tm.config == cfg and train.evaluate(tm, ds.test) == {k: v for k, v in rec["test"].items() if k != "p_heavy"}
     (tmp_path / "runs" / f"{rec['key']}.json").write_text("{broken")
-    again = runs.run(ds, cfg, tmp_path)
+    again = records.run(ds, cfg, tmp_path)
     assert again["test"] == rec["test"], "a damaged cache entry is retrained, with the same result"
 
 
@@ -192,15 +193,15 @@ def test_the_run_validation_picks_is_one_statistic_over_one_data_set_or_several(
 
 
 def test_presets():
-    big = experiments.preset("paper")
+    big = runs.preset("paper")
     assert len(big.grid_seeds) >= 3 and len(big.seeds) >= 5 and big.n_grid() >= 2 and big.n_grid('gru') >= big.n_grid()
     assert big.min_epochs >= 20 and big.max_epochs > 2 * big.min_epochs
-    assert experiments.preset("smoke").max_epochs < big.max_epochs
+    assert runs.preset("smoke").max_epochs < big.max_epochs
     assert big.base_config() == train.TrainConfig(), "the paper preset trains with TrainConfig's own protocol"
     assert big.base_config() in paper.grid_configs(big), "the grid holds the defaults"
-    assert set(experiments.PRESETS) == set(presets.NAMES)
+    assert set(runs.PRESETS) == set(presets.NAMES)
     with pytest.raises(ConfigError, match="preset"):
-        experiments.preset("huge")
+        runs.preset("huge")
 
 
 def test_long_input_effect():
@@ -238,7 +239,7 @@ def test_parallel_runs_equal_sequential_runs(tmp_path, ds):
 def test_a_dask_cluster_trains_the_same_records_as_the_local_pool(tmp_path, smoke_dataset):
     """The smoke Table 1, trained into one fresh folder on a LocalCluster and into another on the local process
     pool: the same records, bit for bit (train_seconds aside), under the same keys."""
-    smoke = experiments.preset("smoke")
+    smoke = runs.preset("smoke")
     cfg = smoke.base_config()
     pool = runner(smoke_dataset, smoke, tmp_path / "pool", workers=2).seed_runs(cfg)
     dask = runner(smoke_dataset, smoke, tmp_path / "dask", workers=2, scheduler="local").seed_runs(cfg)

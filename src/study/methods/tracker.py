@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from study.experiments.videos import Video
+from study.methods.videos import Video
 from study.see import render, track
 from study.see.config import TrackConfig
 from study.see.trajectory import Trajectory

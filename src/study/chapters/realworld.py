@@ -19,7 +19,7 @@ The pipeline, video by video:
 2. the model a camera in a car should use, chosen among four candidates on observed validation throws
    (:func:`recommend`);
 3. Table 1's Z model (and the recommended one, where it differs) on every video, per class with Wilson
-   intervals beside the paper's 93 % and 100 % (``study.experiments.paper.REAL_WORLD``), every candidate's
+   intervals beside the paper's 93 % and 100 % (``study.runs.paper.REAL_WORLD``), every candidate's
    label for every video, and how the labels move with a wrong scale (:data:`FACTORS`);
 4. the data of the paper's Figures 1, 5 and 6 (:class:`Filmstrip`, :class:`HeightSeries`, :class:`TrackView`).
 
@@ -39,8 +39,10 @@ import numpy as np
 from study import CLASSES
 from study.core.errors import ConfigError, StudyError
 from study.core.progress import Progress
-from study.experiments import paper, tracker, verdicts
-from study.experiments.videos import (  # noqa: F401  (re-exported: the chapter's videos)
+from study.runs import paper
+from study.methods import tracker
+from study.report import verdicts
+from study.methods.videos import (  # noqa: F401  (re-exported: the chapter's videos)
     REAL_CLIPS_DEFAULT,
     REAL_CLIPS_ENV,
     TENNIS_BALL,
@@ -52,18 +54,18 @@ from study.experiments.videos import (  # noqa: F401  (re-exported: the chapter'
     render_set,
     throw,
 )
-from study.experiments.reported import Number, Reported, Verdict, named, number
-from study.experiments.text import Table, pct, pct_ci
+from study.report.reported import Number, Reported, Verdict, named, number
+from study.report.text import Table, pct, pct_ci
 from study.learn.config import Inputs, TrainConfig
 from study.learn.metrics import Interval, wilson
 from study.see import render, track, video
 from study.simulate import measure
 
 if TYPE_CHECKING:  # the runner imports this module (its rendered throws): a type here, not an import cycle
-    from study.experiments.runner import Recommendation, Runner
+    from study.runs.runner import Recommendation, Runner
 
 # ---------------------------------------------------------------------------------------------
-# Videos: rendered with a known answer, or read from a folder with a manifest (study.experiments.videos)
+# Videos: rendered with a known answer, or read from a folder with a manifest (study.methods.videos)
 
 
 class Model(Protocol):
@@ -92,7 +94,7 @@ class Tracked:
 
 def track_all(videos: Sequence[Video], progress: bool = True) -> dict[str, Tracked]:
     """Track every video: file name -> :class:`Tracked`. A rendered throw's heights come from the render's camera at
-    the object's depth (``study.experiments.tracker.track_rendered``); a real clip's, whose camera is unknown, from
+    the object's depth (``study.methods.tracker.track_rendered``); a real clip's, whose camera is unknown, from
     one scale, the object's known size over its blob's size at rest (``study.see.gaps.set_scale``)."""
     out: dict[str, Tracked] = {}
     with Progress("track videos", total=len(videos), show=progress, unit="video") as bar:

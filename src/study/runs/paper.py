@@ -1,7 +1,7 @@
 """The paper's own numbers, quoted in one place, and the configurations of its experiments, as pure functions of
 a preset: which runs each one trains.
 
-:class:`study.experiments.runner.Runner` trains them; keeping the configurations here, free of any training,
+:class:`study.runs.runner.Runner` trains them; keeping the configurations here, free of any training,
 lets a reader see every run of an experiment in a few lines:
 
 1. :func:`grid_configs` -- the paper's grid search on Z for one cell, every point once per grid seed
@@ -24,8 +24,8 @@ from typing import Any, get_args
 
 import numpy as np
 
-from study.experiments.presets import Preset
-from study.experiments.runtable import Runs
+from study.runs.presets import Preset
+from study.runs.runtable import Runs
 from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
 
 TABLE1: dict[Dims, float] = {"xyz": 0.81, "z": 0.78}
