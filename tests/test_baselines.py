@@ -11,7 +11,7 @@ from study.book import results
 from study.runs import Runner, paper, stats
 from study.chapters import baselines
 from study.report import verdicts
-from study.runs.runner import OBSERVED_SEEDS
+from study.methods.calibration import OBSERVED_SEEDS
 from study.learn.config import TrainConfig
 from study.simulate import measure
 from study.simulate.observe import Observation
@@ -19,7 +19,7 @@ from study.simulate.observe import Observation
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
 OB = Observation(noise=0.02, drop=0.1)
-"""A tracker's error, as ``Runner.observation`` would measure it on rendered video."""
+"""A tracker's error, as ``calibration.observation`` would measure it on rendered video."""
 
 
 def _grid_val(c: TrainConfig) -> float:

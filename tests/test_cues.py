@@ -14,6 +14,7 @@ from fake_runs import cache_records
 from study.book import results
 from study.book.publish import glued
 from study.runs import Runner, paper, records
+from study.methods import calibration
 from study.chapters import cues
 from study.runs.runtable import Run, Runs
 from study.methods.tracker import Decomposition, TrackerError
@@ -30,7 +31,7 @@ FIT = TrackerFit(MODEL, drop=0.01, intervals={k: Interval(
     getattr(MODEL, k), 0.9 * getattr(MODEL, k), 1.1 * getattr(MODEL, k), "bootstrap over 40 videos")
     for k in ("offset", "rho", "flight", "contact")}, n_videos=40, n_frames=3000, n_contact=1200, step_sd=0.0095,
     pooled_sd=0.014, bias=0.002, lag1=0.8, fitted_on="40 development renders (render seed 2000)")
-"""A fitted error model as ``Runner.tracker_fit`` gives it."""
+"""A fitted error model as ``calibration.tracker_fit`` gives it."""
 
 
 def drag_only(n: int, seed: int, fps: float = 30.0, frames: int = 60) -> data.Split:
@@ -274,10 +275,10 @@ def whole(tmp_path_factory):
         raise AssertionError(f"the chapter trained a run instead of reading its record: {args[1]}")
 
     mp.setattr(records, "run", would_train)
-    mp.setattr(Runner, "rendered", lambda self: (["rendered.mp4"] * 3, None))
-    mp.setattr(Runner, "tracker_error", lambda self: TrackerError(1.0, 0.014, 0.05, 90, 0.014))
-    mp.setattr(Runner, "tracker_fit", lambda self: FIT)
-    mp.setattr(Runner, "tracker_decomposition", lambda self: {"before": BEFORE, "after": AFTER})
+    mp.setattr(calibration, "rendered", lambda runner: (["rendered.mp4"] * 3, None))
+    mp.setattr(calibration, "tracker_error", lambda runner: TrackerError(1.0, 0.014, 0.05, 90, 0.014))
+    mp.setattr(calibration, "tracker_fit", lambda runner: FIT)
+    mp.setattr(calibration, "decomposition", lambda runner: {"before": BEFORE, "after": AFTER})
     mp.setattr(Runner, "models", lambda self, cfg, seeds, **changes: [Threshold(0.3 + 0.1 * s) for s in seeds])
     toy = {name: dataclasses.replace(runner.dataset, meta={**runner.dataset.meta, "key": f"shape-{i}"})
            for i, name in enumerate(cues.SHAPES)}  # the smoke throws under six names: no new simulation
@@ -286,7 +287,7 @@ def whole(tmp_path_factory):
     cfg = runner.table1_config()
     for r, cfgs, test in cues.condition_configs(runner, cfg):
         cache_records(r, cfgs, _score, test=test, val_score=lambda c: 0.7)  # Table 1's grid point keeps its score
-    mixed = runner.on(runner.saved(cues.mixed_shapes(toy), "mixed"))
+    mixed = runner.on(cues.saved(runner, cues.mixed_shapes(toy), "mixed"))
     cache_records(mixed, paper.seed_configs(cfg, p.grid_seeds, ("z",)))
     sweeps = {"fps": cues.Sweep("camera frame rate, fps", [15, 120], lambda v: observe.Observation(camera_fps=v))}
     try:
@@ -321,7 +322,7 @@ def test_the_fitted_error_model_is_reported_and_is_what_observed_runs_draw(whole
     assert glue["model_description"] == MODEL.describe() and glue["tracker_model.offset"].endswith("]")
     names = {name for name, _ in result.numbers.entries()}
     assert {f"cues.tracker_model.{k}" for k in ("offset", "rho", "flight", "contact", "step_sd", "drop")} <= names
-    robust = runner.randomised_config(runner.table1_config())
+    robust = calibration.randomised_config(runner, runner.table1_config())
     assert (robust.observe_rho, robust.observe_offset, robust.observe_noise) == (0.84, 0.006, 0.02)
     assert robust.observe_drop == 0.01, "validated as the fitted tracker observes"
 

@@ -9,6 +9,7 @@ import pytest
 from study.book import results
 from study.core.errors import ConfigError
 from study.runs import Runner, paper
+from study.methods import calibration
 from study.chapters import decision, motion
 from study.methods.tracker import TrackerError
 
@@ -334,8 +335,8 @@ def test_the_camera_network_is_chosen_on_observed_validation_and_the_splits_are_
     runner = Runner.open("smoke", data_dir=tmp_path)
     p = runner.preset
     error = TrackerError(1.1, 0.015, 0.05, 100, 0.0138)
-    monkeypatch.setattr(Runner, "tracker_error", lambda self: error)
-    monkeypatch.setattr(Runner, "observation", lambda self: error.observation())
+    monkeypatch.setattr(calibration, "tracker_error", lambda runner: error)
+    monkeypatch.setattr(calibration, "observation", lambda runner: error.observation())
     for inputs in ("positions", "velocity"):
         cache_records(runner, paper.grid_configs(p, "peephole", inputs), test=False)
     column = next(c for c in motion.columns(error) if c.air and c.name == "calibrated")
@@ -354,5 +355,5 @@ def test_the_camera_network_is_chosen_on_observed_validation_and_the_splits_are_
     assert (sp.certify_y == 1).sum() == p.certify_per_class
     assert sp.observed_test.shape == (len(runner.dataset.test.y), T, 3) and sp.observed_certify.shape[1] == T
     assert not np.allclose(sp.observed_test, runner.dataset.test.x[:, :T]), "observed with the tracker's error"
-    assert not np.array_equal(sp.observed_test, runner.observed("test", error.observation(), T)), "its own draw"
+    assert not np.array_equal(sp.observed_test, calibration.observed(runner, "test", error.observation(), T)), "its own draw"
     np.testing.assert_array_equal(decision.splits(runner).observed_certify, sp.observed_certify)

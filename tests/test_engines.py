@@ -86,7 +86,7 @@ def e(tmp_path_factory) -> engine.AnotherEngine:
     cache_records(runner, paper.grid_configs(p, "peephole", "velocity"), test=False, val_score=_val)
     cfgs = engine.configs(runner)
     cols = engine.columns(CAL)
-    runners = {eng: runner.in_engine(eng) for eng in synth.ENGINES}
+    runners = {eng: engine.engine_runner(runner, eng) for eng in synth.ENGINES}
     for r, batch, _ in engine.plan(runners, cfgs, cols, p.grid_seeds, p.seeds):
         cache_records(r, batch, _score, val_score=_val)
         cache_models(r, [c for c in batch if c.dims == "z"])

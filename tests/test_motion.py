@@ -24,7 +24,7 @@ pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
 MODEL = TrackerNoise(flight=0.02, contact=0.008, offset=0.006, rho=0.84)
 CAL = Observation(tracker=MODEL, drop=0.05)
-"""The calibrated tracker as ``Runner.observation`` gives it: the fitted error model and its lost frames."""
+"""The calibrated tracker as ``calibration.observation`` gives it: the fitted error model and its lost frames."""
 WHITE = TrackerError(noise_px=1.02, noise_m=0.0141, drop=0.05, n_frames=100, metres_per_pixel=0.0138)
 
 

@@ -14,7 +14,7 @@ from study.book import results
 from study.core.errors import ConfigError, DataError
 from study.runs import paper
 from study.chapters import realworld
-from study.runs.runner import Recommendation
+from study.chapters.realworld import Recommendation
 from study.report.text import Table
 from study.learn.metrics import Interval
 from study.see import render

@@ -12,6 +12,7 @@ from study import runs
 from study.core import presets
 from study.core.errors import ConfigError
 from study.runs import cluster, paper, records, schedule, stats
+from study.chapters import cues, length, realworld, table1
 from study.report import text
 from study.runs.runner import Runner
 from study.runs.runtable import Run, Runs
@@ -52,7 +53,7 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
     assert [(g.get("dims"), g.seed) for g in seeds] == [("z", 0), ("z", 1), ("xyz", 0), ("xyz", 1)]
     assert all(0 <= g.accuracy <= 1 and g.correct.shape == (16,) for g in seeds)
     assert seeds.where(dims="z").correct().shape == (2, 16) and len(seeds.groups("dims")) == 2
-    lengths = r.length_sweep(cfg)
+    lengths = length.length_runs(r, cfg)
     assert [(g.get("dims"), g.get("length"), g.get("frames")) for g in lengths] == [
         ("z", 0.3, 9), ("z", 0.5, 15), ("xyz", 0.3, 9), ("xyz", 0.5, 15)]
     n_trained = len(list((tmp_path / "models").iterdir()))
@@ -60,7 +61,7 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
     again = runner(ds, one_cell, tmp_path)  # every model cached now: asked for the same, it counts the same
     again.trained(cfg)
     assert again.plan.n_models == 1, "a model loaded from the cache is in the plan as one trained afresh"
-    long = r.long_memory(cfg)
+    long = length.long_memory_runs(r, cfg)
     assert [(g.get("dims"), g.get("length"), g.get("truncation")) for g in long] == [("z", 0.5, 15), ("xyz", 0.5, 15)], \
         "the long-memory variant back-propagates through every frame of the input"
     configs = [json.loads(f.read_text())["config"] for f in (tmp_path / "runs").glob("*.json")]
@@ -147,12 +148,12 @@ def test_ablation_and_baseline(tmp_path, ds):
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     winners = {c: dataclasses.replace(cfg, lr=lr) for c, lr in zip(TINY.cells, (1e-2, 3e-3, 1e-3))}
     r = runner(ds, dataclasses.replace(TINY, seeds=(0,)), tmp_path)
-    rows = r.ablation(winners)
+    rows = table1.ablation_runs(r, winners)
     assert rows.values("cell") == ["peephole", "no-peephole", "gru"]
     recs = {json.loads(f.read_text())["config"]["cell"]: json.loads(f.read_text())["config"]["lr"]
             for f in (tmp_path / "runs").glob("*.json")}
     assert recs == {"peephole": 1e-2, "no-peephole": 3e-3, "gru": 1e-3}, "each cell at its own winner"
-    base = r.baseline_runs()
+    base = table1.baseline_runs(r)
     assert list(base) == ["z", "xyz"] and all(0 <= b.accuracy <= 1 and b.correct.shape == (16,) for b in base.values())
 
 
@@ -270,10 +271,10 @@ def test_the_recommended_model_is_the_best_candidate_on_observed_validation_thro
     r = runner(toy, TINY, tmp_path)
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     ob = observe.Observation(noise=0.01, drop=0.1)
-    cands = r.candidates({"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}, ob)
+    cands = realworld.candidates(r, {"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}, ob)
     assert list(cands) == ["positions, exact", "positions, randomised", "velocity, exact", "velocity, randomised"]
     assert cands["velocity, randomised"].observe == "randomised" and cands["velocity, randomised"].observe_noise == 0.01
-    rec = r.recommended(cands, ob=ob)
+    rec = realworld.recommended(r, cands, ob=ob)
     choice, val, models = rec.choice, rec.val, rec.models
     assert set(val) == set(models) == set(cands) and choice == max(val, key=lambda k: val[k].value)
     assert rec.model is models[choice] and models[choice].config == dataclasses.replace(cands[choice], seed=0)
@@ -282,9 +283,9 @@ def test_the_recommended_model_is_the_best_candidate_on_observed_validation_thro
 
 def test_an_in_memory_dataset_is_saved_once_for_the_workers(tmp_path, ds):
     r = runner(ds, TINY, tmp_path)
-    saved = r.saved(ds, "mixed")
+    saved = cues.saved(r, ds, "mixed")
     assert saved.path == tmp_path / f"mixed-{ds.key}.npz" and saved.key == ds.key
     np.testing.assert_array_equal(saved.train.x, ds.train.x)
     mtime = saved.path.stat().st_mtime_ns
-    assert r.saved(ds, "mixed").path.stat().st_mtime_ns == mtime, "written once"
+    assert cues.saved(r, ds, "mixed").path.stat().st_mtime_ns == mtime, "written once"
     assert r.on(saved).dataset is saved and r.on(saved).plan is r.plan

@@ -35,6 +35,7 @@ from study.report.reported import Number, Reported, Verdict, named, number
 from study.runs.runner import Runner
 from study.report.text import Table, points, seeds_ci
 from study.learn import baseline, train
+from study.methods import calibration, learners
 from study.learn.config import Cell, Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.learn.rocket import MiniRocket
@@ -115,24 +116,24 @@ class Splits:
 
 def splits(runner: Runner, ob: Observation) -> Splits:
     """Each network's grid point, the input length and seeds, and both splits as ``ob`` observes them (the one
-    observed draw the chapters share, ``Runner.observed``)."""
+    observed draw the chapters share, ``calibration.observed``)."""
     cfgs = {c: runner.winner(c) for c in NETWORKS}
     T = cfgs["peephole"].n_frames(runner.fps)
-    return Splits(cfgs, T, runner.preset.grid_seeds, runner.observed("train", ob, T), runner.observed("test", ob, T),
+    return Splits(cfgs, T, runner.preset.grid_seeds, calibration.observed(runner, "train", ob, T), calibration.observed(runner, "test", ob, T),
                   runner.synth_config.shape.bounding_radius)
 
 
 def networks(runner: Runner, s: Splits) -> Correct:
     """The networks' runs (Table 1's and the ablation's, cached; the GRU with X, Y, Z trained here), trained on
-    exact positions; on Z also tested on observed positions."""
+    exact positions (their records' answers on the test split); on Z also tested on observed positions."""
     y = np.asarray(runner.dataset.test.y)
     out: Correct = {}
     for cell in NETWORKS:
         for d in ("xyz", "z"):
-            out[cell, d, "exact"] = runner.train_runs(s.configs[cell], (d,), s.seeds, desc=cell).correct()
-            if d == "z":
-                models = runner.models(s.configs[cell], s.seeds, dims=d)
-                out[cell, d, "observed"] = np.stack([m.predict_proba(s.x_test_observed).argmax(1) == y for m in models])
+            tests = {"observed": (s.x_test_observed, y)} if d == "z" else {}
+            scores = learners.Network(cell, s.configs[cell], s.seeds, dims=d).score(runner, None, tests)
+            out[cell, d, "exact"] = scores.runs.correct()  # type: ignore[union-attr]
+            out.update({(cell, d, cond): c for cond, c in scores.correct.items()})  # type: ignore[misc]
     return out
 
 
@@ -143,10 +144,9 @@ def rockets(runner: Runner, s: Splits) -> Correct:
     y = np.asarray(ds.test.y)
     out: Correct = {}
     for d in ("xyz", "z"):
-        tests = {"exact": ds.test.x} | ({"observed": s.x_test_observed} if d == "z" else {})
-        labels = [runner.rocket(d, s.n_frames, seed, tests) for seed in s.seeds]
-        for cond in tests:
-            out["minirocket", d, cond] = np.stack([lab[cond] == y for lab in labels])  # type: ignore[index]
+        tests = {"exact": (ds.test.x, y)} | ({"observed": (s.x_test_observed, y)} if d == "z" else {})
+        scores = learners.Rocket(d, s.n_frames, s.seeds).score(runner, None, tests)
+        out.update({("minirocket", d, cond): c for cond, c in scores.correct.items()})  # type: ignore[misc]
     return out
 
 
@@ -157,10 +157,9 @@ def physics(runner: Runner, s: Splits) -> Correct:
     y, length = np.asarray(ds.test.y), s.n_frames / ds.fps
     out: Correct = {}
     for d in ("xyz", "z"):
-        out["physics", d, "exact"] = baseline.fit(ds, d, length).predict_proba(ds.test.x).argmax(1) == y
-    observed = dataclasses.replace(ds, train=dataclasses.replace(ds.train, x=s.x_train_observed))
-    fitted = baseline.fit(observed, "z", length)
-    out["physics", "z", "observed"] = fitted.predict_proba(s.x_test_observed).argmax(1) == y
+        out["physics", d, "exact"] = learners.Physics(d, length).score(runner, None, {"t": (ds.test.x, y)}).correct["t"][0]
+    observed = learners.Physics("z", length).score(runner, s.x_train_observed, {"t": (s.x_test_observed, y)})
+    out["physics", "z", "observed"] = observed.correct["t"][0]
     return out
 
 
@@ -173,10 +172,10 @@ def rules(runner: Runner, s: Splits) -> tuple[Correct, dict[tuple[Dims, Conditio
     chosen: dict[tuple[Dims, Condition], str] = {}
     for d, cond in CELLS:
         xtr, xte = inputs[cond]
-        names = Z_RULES if d == "z" else None
-        best = measure.best_rule(measure.simple_rules(xtr, ds.train.y, xte, ds.test.y, ds.fps, s.contact, names))
-        out["rule", d, cond] = best["correct"]
-        chosen[d, cond] = best["feature"]
+        rule = learners.Rule(Z_RULES if d == "z" else None, s.contact, height_only=False)
+        scores = rule.score(runner, xtr, {cond: (xte, ds.test.y)})
+        out["rule", d, cond] = scores.correct[cond][0]
+        chosen[d, cond] = scores.feature
     return out, chosen
 
 
@@ -367,7 +366,7 @@ def result(s: Splits, acc: Accuracy, cost: Mapping[Method, Cost]) -> Baselines:
 
 def compute(runner: Runner, ob: Observation | None = None, cost: Mapping[Method, Cost] | None = None) -> Baselines:
     """The chapter on ``runner``'s preset and data set: observed as ``ob`` (default: the calibrated tracker,
-    ``Runner.observation``), with the costs ``cost`` (default: timed afresh, :func:`costs`)."""
-    s = splits(runner, ob or runner.observation())
+    ``calibration.observation``), with the costs ``cost`` (default: timed afresh, :func:`costs`)."""
+    s = splits(runner, ob or calibration.observation(runner))
     acc = accuracy(runner, s)
     return result(s, acc, costs(runner, s) if cost is None else cost)

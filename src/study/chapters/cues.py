@@ -6,7 +6,7 @@ those cues a classifier uses, with Table 1's protocol and configuration (no new 
 
 1. the drag cue (:func:`drag_cue`): the first fall's vertical acceleration, one threshold on it, and the same
    threshold under tracker noise;
-2. the tracker's error on rendered video (``Runner.tracker_error``, ``study.methods.tracker``);
+2. the tracker's error on rendered video (``calibration.tracker_error``, ``study.methods.tracker``);
 3. four conditions (:func:`conditions`): (a) exact positions with air, (b) the same throws without air, (c)
    Table 1's Z models tested as observed, (d) Z models trained on random observations; the one-feature rules
    (:func:`rules`) on the same input; the fitted ceiling (:func:`ceiling`); whether the network beats the best
@@ -42,6 +42,8 @@ from study.report.text import Table, pct_ci, seeds_ci
 from study.methods.tracker import LABELS, Decomposition, TrackerError
 from study.methods.tracker_model import TrackerFit, TrackerFitNumbers
 from study.learn import baseline
+from study.methods import calibration
+from study.methods.windows import DRAG, rules, window_cues  # noqa: F401  (the chapter's rules)
 from study.learn.config import Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.learn.train import TrainedModel
@@ -62,8 +64,6 @@ GROUPS: dict[Group, str] = {"exact": "trained on exact positions", "random": "tr
 """Each group of Z models in words."""
 PARAMETERS = ("restitution", "mass", "friction")
 """The throw parameters the errors are set against."""
-DRAG = "fall_acceleration"
-"""The drag rule's feature (``study.simulate.measure.FEATURES``)."""
 ROBUSTNESS_SEED = 5
 """Seed of the observation noise of every point of the robustness sweeps."""
 
@@ -214,7 +214,7 @@ class Numbers(Reported):
     shape: dict[str, ShapeNumbers] = named("shape")
     """Each test shape, by :func:`shape_key`."""
     tracker_model: TrackerFitNumbers | None = None
-    """The tracker's error model fitted on development renders (``Runner.tracker_fit``): the calibrated observation."""
+    """The tracker's error model fitted on development renders (``calibration.tracker_fit``): the calibrated observation."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -272,32 +272,6 @@ def drag_per_class(a: np.ndarray, y: np.ndarray) -> dict[str, float]:
 
 # ---------------------------------------------------------------------------------------------
 # What separates the classes without learning
-
-
-def rules(train_x: np.ndarray, train_y: np.ndarray, test_x: np.ndarray, test_y: np.ndarray, fps: float,
-          contact_height: float, names: Sequence[str] | None = None) -> list[dict]:
-    """The one-feature rules of ``study.simulate.measure`` on exactly these inputs (the first T seconds),
-    each with the bootstrap interval of its test accuracy."""
-    rows = measure.simple_rules(train_x, train_y, test_x, test_y, fps, contact_height, tuple(names or measure.FEATURES))
-    return [r | {"interval": bootstrap_accuracy(r["correct"])} for r in rows]
-
-
-def window_cues(dataset: data.Dataset, lengths: Sequence[float], contact_height: float) -> list[dict]:
-    """What the first T seconds of each test throw hold, for each T (s) of ``lengths``: the share whose first
-    fall has ended inside the window (``landed``), the drag rule's test accuracy on the window (``drag``)
-    and the best other one-feature rule's (``other``, named by ``other_feature``), intervals over test throws."""
-    rows = []
-    for length in lengths:
-        n = round(length * dataset.fps)
-        xte = dataset.test.x[:, :n]
-        ends = [measure.first_contact(z) for z in xte[..., 2]]
-        by = {r["feature"]: r for r in rules(dataset.train.x[:, :n], dataset.train.y, xte, dataset.test.y,
-                                             dataset.fps, contact_height)}
-        drag = by.pop(DRAG)
-        other = max(by.values(), key=lambda r: r["test_accuracy"])
-        rows.append({"length": float(length), "landed": float(np.mean([e is not None for e in ends])),
-                     "drag": drag["interval"], "other": other["interval"], "other_feature": other["feature"]})
-    return rows
 
 
 def ceiling(dataset: data.Dataset, with_mass: bool = False) -> Interval:
@@ -359,7 +333,7 @@ def condition_configs(runner: Runner, cfg: TrainConfig) -> list[tuple[Runner, li
     """The runs of (a), (b) and (d), as ``Runner.prefetch`` takes them (all at once keeps every core busy)."""
     seeds = runner.preset.grid_seeds
     both = paper.seed_configs(cfg, seeds, ("z", "xyz"))
-    return [(runner, both + paper.seed_configs(runner.randomised_config(cfg), seeds, ("z",)), True),
+    return [(runner, both + paper.seed_configs(calibration.randomised_config(runner, cfg), seeds, ("z",)), True),
             (runner.air_off(), both, True)]
 
 
@@ -373,11 +347,11 @@ def conditions(runner: Runner, cfg: TrainConfig) -> Conditions:
     still = runner.air_off()  # the same throws, no air
     air_off = still.train_runs(cfg, ("z", "xyz"), seeds, desc="(b)")
     faithful = runner.models(cfg, seeds, dims="z")
-    rand_cfg = runner.randomised_config(cfg)
+    rand_cfg = calibration.randomised_config(runner, cfg)
     runner.train_runs(rand_cfg, ("z",), seeds, desc="(d)")
     robust = runner.models(rand_cfg, seeds, dims="z")
-    calibrated = runner.observation()
-    x_obs, x_obs_train = runner.observed("test", calibrated, T), runner.observed("train", calibrated, T)
+    calibrated = calibration.observation(runner)
+    x_obs, x_obs_train = calibration.observed(runner, "test", calibrated, T), calibration.observed(runner, "train", calibrated, T)
 
     def observed_correct(models: list[TrainedModel]) -> np.ndarray:
         return np.stack([m.predict_proba(x_obs).argmax(1) == ds.test.y for m in models])
@@ -578,6 +552,15 @@ class ShapeScore:
         return self.name in MIXED
 
 
+def saved(runner: Runner, dataset: data.Dataset, name: str) -> data.Dataset:
+    """An in-memory ``dataset`` (one with a key but no file) written to the cache once, so that workers read
+    it from the shared folder; returns it as read back."""
+    path = runner.data_dir / f"{name}-{dataset.key}.npz"
+    if not path.is_file():
+        data.save(dataset, path)
+    return data.load(path)
+
+
 def shape_scores(runner: Runner, cfg: TrainConfig, cube_models: Sequence[TrainedModel]) -> list[ShapeScore]:
     """Table 1's Z models (``cube_models``) and Z models trained on :data:`MIXED` at ``cfg`` (the grid's
     seeds), each tested on every shape of :data:`SHAPES`, the first T seconds."""
@@ -585,7 +568,7 @@ def shape_scores(runner: Runner, cfg: TrainConfig, cube_models: Sequence[Trained
     T = cfg.n_frames(ds.fps)
     seed = int(ds.meta["seed"]) + SHAPE_SEED_OFFSET
     sets = shape_sets(p.name, seed, T / ds.fps, p.shape_train, p.shape_test, data_dir=runner.data_dir)
-    shapes = runner.on(runner.saved(mixed_shapes(sets), "mixed"))  # workers read it
+    shapes = runner.on(saved(runner, mixed_shapes(sets), "mixed"))  # workers read it
     shapes.train_runs(cfg, ("z",), p.grid_seeds, desc="mixed")
     mixed = shapes.models(cfg, p.grid_seeds, dims="z")
     return [ShapeScore(name, scored(cube_models, sd.test.x[:, :T], sd.test.y), scored(mixed, sd.test.x[:, :T],
@@ -632,7 +615,7 @@ class Cues:
     tracker_fit: TrackerFit | None = None
     decomposed: Mapping[str, Decomposition] = field(default_factory=dict)
     """The tracked height's error taken apart on the book's renders, before issue 28's tracker and after."""
-    """The tracker's error model fitted on development renders: the calibrated observation (``Runner.observation``)."""
+    """The tracker's error model fitted on development renders: the calibrated observation (``calibration.observation``)."""
 
     # The fitted error model in the chapter's words (empty without one) ------------------------
 
@@ -832,8 +815,8 @@ def compute(runner: Runner, noise_mm: Sequence[float], sweeps: Mapping[str, Swee
     cfg = runner.table1_config()
     T = cfg.n_frames(ds.fps)  # the frames every classifier here sees
     drag = drag_cue(ds, T, prior.shape.bounding_radius, noise_mm)
-    videos, _ = runner.rendered()
-    tracker = runner.tracker_error()
+    videos, _ = calibration.rendered(runner)
+    tracker = calibration.tracker_error(runner)
     cond = conditions(runner, cfg)
     high = high_rate_test(p.name, int(ds.meta["seed"]), T / ds.fps, data_dir=runner.data_dir)  # 120 fps
     points = robustness({"exact": cond.faithful, "random": cond.robust}, ds.test.x, ds.test.y, ds.fps, T, sweeps,
@@ -844,8 +827,8 @@ def compute(runner: Runner, noise_mm: Sequence[float], sweeps: Mapping[str, Swee
     shapes = shape_scores(runner, cfg, cond.faithful)
     return assemble(drag, tracker, cond, (ceiling(ds), ceiling(ds, with_mass=True)),
                     exact_ceiling(prior, ("restitution", "friction")), sweeps, points, by, errors, shapes,
-                    n_videos=len(videos), length_frames=T, tracker_fit=runner.tracker_fit(),
-                    decomposed=runner.tracker_decomposition())
+                    n_videos=len(videos), length_frames=T, tracker_fit=calibration.tracker_fit(runner),
+                    decomposed=calibration.decomposition(runner))
 
 
 def assemble(drag: DragCue, tracker: TrackerError, cond: Conditions, fitted: tuple[Interval, Interval],
@@ -855,7 +838,7 @@ def assemble(drag: DragCue, tracker: TrackerError, cond: Conditions, fitted: tup
              decomposed: Mapping[str, Decomposition] | None = None) -> Cues:
     """The chapter's result from its parts (what :func:`compute` measured): its numbers, verdicts and tables.
     ``fitted``: the fitted ceiling without and with the mass (:func:`ceiling`); ``exact``: the exact one;
-    ``tracker_fit``: the tracker's fitted error model (``Runner.tracker_fit``)."""
+    ``tracker_fit``: the tracker's fitted error model (``calibration.tracker_fit``)."""
     conds, best, drag_rules = _condition_numbers(cond)
     over_rule = {d: cond.network_minus_rule(d) for d in ("xyz", "z")}
     claims = {d: verdicts.order(iv, +1) for d, iv in over_rule.items()}  # the network above the rule

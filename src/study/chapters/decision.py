@@ -43,11 +43,11 @@ from typing import TYPE_CHECKING, Literal, Protocol
 import numpy as np
 
 from study.core.errors import ConfigError
-from study.chapters import motion
 from study.runs import stats
 from study.report.reported import Number, Reported, count, named, number
 from study.report.text import Table, fmt, pct, pct_ci
 from study.learn.config import Inputs, TrainConfig
+from study.methods import calibration, camera
 from study.learn.metrics import Interval, bootstrap_accuracy, wilson
 from study.simulate import synth
 
@@ -537,11 +537,11 @@ def certification_config(runner: Runner) -> synth.SynthConfig:
 def splits(runner: Runner) -> Splits:
     """The certification split (simulated once, from seed :data:`CERTIFY_SEED` above the data set's; throws that
     neither training, early stopping nor the grid search has seen) beside the data set's test split, both also
-    observed with the tracker's error (``Runner.observation``; seeds :data:`OBSERVE_SEEDS`)."""
+    observed with the tracker's error (``calibration.observation``; seeds :data:`OBSERVE_SEEDS`)."""
     T = runner.table1_config().n_frames(runner.fps)
     seed = int(runner.dataset.meta["seed"]) + CERTIFY_SEED
     certify = synth.dataset(certification_config(runner), seed, data_dir=runner.data_dir, progress=False).test
-    test, ob = runner.dataset.test, runner.observation()
+    test, ob = runner.dataset.test, calibration.observation(runner)
     return Splits(T, runner.fps, test.x, np.asarray(test.y), certify.x, np.asarray(certify.y),
                   ob.observe(test.x[:, :T], runner.fps, seed=OBSERVE_SEEDS["test"]),
                   ob.observe(certify.x[:, :T], runner.fps, seed=OBSERVE_SEEDS["certify"]))
@@ -563,15 +563,15 @@ class CameraChoice:
 def camera_network(runner: Runner) -> CameraChoice:
     """Positions or velocity for a camera: the paper's network trained and validated observed with the tracker's
     error (the motion chapter's column), chosen by its mean validation accuracy."""
-    column = next(c for c in motion.columns(runner.observation()) if c.air and c.name == "calibrated")
+    column = next(c for c in camera.columns(calibration.observation(runner)) if c.air and c.name == "calibrated")
     choices: dict[Inputs, TrainConfig] = {"positions": runner.table1_config(),
                                           "velocity": runner.table1_config("velocity")}
     val: dict[Inputs, float] = {
-        k: float(np.mean(runner.train_runs(motion.trained_config(c, column), ("z",), runner.preset.grid_seeds,
+        k: float(np.mean(runner.train_runs(camera.trained_config(c, column), ("z",), runner.preset.grid_seeds,
                                            desc=f"{k}, observed").val_accuracies()))
         for k, c in choices.items()}
     best = max(val, key=val.__getitem__)  # ties: positions
-    return CameraChoice(val, best, dataclasses.replace(motion.trained_config(choices[best], column), loss_at="every"))
+    return CameraChoice(val, best, dataclasses.replace(camera.trained_config(choices[best], column), loss_at="every"))
 
 
 @dataclass(frozen=True)
@@ -838,7 +838,7 @@ def compute(runner: Runner, target_miss: float = TARGET_MISS) -> CarDecision:
     seeds = runner.preset.seeds
     cfg = runner.table1_config()
     faithful = runner.models(cfg, seeds, dims="z")
-    robust = runner.models(runner.randomised_config(cfg), seeds, dims="z")
+    robust = runner.models(calibration.randomised_config(runner, cfg), seeds, dims="z")
     cameras = runner.models(camera.config, seeds, dims="z")
     exact = (sp.certify_x, sp.certify_y, sp.test_x, sp.test_y)
     observed = (sp.observed_certify, sp.certify_y, sp.observed_test, sp.test_y)

@@ -24,8 +24,8 @@ from typing import Literal, get_args
 import numpy as np
 
 from study import CLASSES
-from study.methods import ceiling
-from study.chapters import motion
+from study.methods import camera, ceiling, learners
+from study.methods import calibration
 from study.runs import paper, stats
 from study.report import verdicts
 from study.report.reported import Number, Reported, count, number
@@ -40,11 +40,11 @@ from study.simulate.data import Dataset
 from study.simulate.synth import ENGINES, ClassPrior, Engine, SynthConfig
 
 Learner = Literal["peephole_positions", "peephole_velocity", "minirocket", "rule"]
-"""The learners of the cross-engine table (named as in ``study.chapters.motion``)."""
+"""The learners of the cross-engine table (named as in ``study.methods.learners.NAMES``)."""
 Network = Literal["peephole_positions", "peephole_velocity"]
 """Its networks."""
 View = Literal["exact", "calibrated"]
-"""How the positions are seen (``motion.Column.name``)."""
+"""How the positions are seen (``camera.Column.name``)."""
 Pair = Literal["mujoco_to_mujoco", "mujoco_to_bullet", "bullet_to_mujoco", "bullet_to_bullet"]
 """A training engine and a test engine."""
 Feature = Literal["bounces", "time_to_rest", "first_rebound", "distance"]
@@ -55,7 +55,7 @@ ClassName = Literal["light", "heavy"]
 LEARNERS: tuple[Learner, ...] = get_args(Learner)
 NETWORKS: tuple[Network, ...] = get_args(Network)
 VIEWS: tuple[View, ...] = get_args(View)
-NAMES: dict[Learner, str] = {name: motion.NAMES[name] for name in LEARNERS}
+NAMES: dict[Learner, str] = {name: learners.NAMES[name] for name in LEARNERS}
 """Each learner in words."""
 AGREEMENT: dict[Feature, str] = {"bounces": "bounces", "time_to_rest": "time to rest, s",
                                  "first_rebound": "first rebound's height, m", "distance": "horizontal distance, m"}
@@ -151,24 +151,32 @@ def agreement(a: np.ndarray, b: np.ndarray, fps: float, rest_height: float) -> d
 # Across engines
 
 
+def engine_runner(runner: Runner, engine: str) -> Runner:
+    """This runner on the same throws, without air, simulated by ``engine`` ('mujoco' or 'bullet'): the same
+    sampled objects and launches, index by index."""
+    cfg = synth.SynthConfig.from_dict(runner.dataset.meta["config"]).replace(air=False, engine=engine)
+    return runner.on(synth.dataset(cfg, int(runner.dataset.meta["seed"]), data_dir=runner.data_dir,
+                                 progress=runner.progress))
+
+
 def configs(runner: Runner) -> dict[Network, TrainConfig]:
     """The networks' configurations: the paper's network at Table 1's point, and the same fed velocity at its own
     grid's point."""
     return {"peephole_positions": runner.table1_config(), "peephole_velocity": runner.table1_config("velocity")}
 
 
-def columns(tracker: TrackerError | observe.Observation) -> list[motion.Column]:
+def columns(tracker: TrackerError | observe.Observation) -> list[camera.Column]:
     """The conditions of the cross-engine table: air off, exact and through the calibrated tracker."""
-    return [c for c in motion.columns(tracker) if not c.air and c.name in VIEWS]
+    return [c for c in camera.columns(tracker) if not c.air and c.name in VIEWS]
 
 
-def plan(runners: Mapping[Engine, Runner], cfgs: Mapping[Network, TrainConfig], cols: Sequence[motion.Column],
+def plan(runners: Mapping[Engine, Runner], cfgs: Mapping[Network, TrainConfig], cols: Sequence[camera.Column],
          seeds: tuple[int, ...], table1_seeds: tuple[int, ...]) -> list[tuple[Runner, list[TrainConfig], bool]]:
     """Every network run of the chapter, as ``Runner.prefetch`` takes them: the cross-engine networks in each
     engine and column, and Table 1's positions network on X, Y, Z and Z with ``table1_seeds``."""
     table1 = [dataclasses.replace(cfgs["peephole_positions"], dims=d, seed=s) for d in ("z", "xyz")
               for s in table1_seeds]
-    return [(r, [dataclasses.replace(motion.trained_config(cfgs[n], c), seed=s)
+    return [(r, [dataclasses.replace(camera.trained_config(cfgs[n], c), seed=s)
                  for c in cols for n in NETWORKS for s in seeds] + table1, True)
             for r in runners.values()]
 
@@ -180,7 +188,7 @@ class Cross:
     learner: Learner
     train: Engine
     test: Engine
-    column: motion.Column
+    column: camera.Column
     correct: np.ndarray
     """(S, n) bool: seed s got test throw i right (S = 1 for the rule)."""
     failed: int = 0
@@ -192,37 +200,29 @@ class Cross:
         return bootstrap_accuracy(self.correct)
 
 
-def cross_entries(runners: Mapping[Engine, Runner], cfgs: Mapping[Network, TrainConfig], column: motion.Column,
+def cross_entries(runners: Mapping[Engine, Runner], cfgs: Mapping[Network, TrainConfig], column: camera.Column,
                   seeds: tuple[int, ...], contact_height: float) -> list[Cross]:
     """Every learner of :data:`LEARNERS`, trained on each engine (``runners``: engine -> the runner on its data
     set) under ``column``'s condition and tested on every engine's test split the same way."""
     T = cfgs["peephole_positions"].n_frames(next(iter(runners.values())).fps)
     data = {e: column.inputs(r.dataset, T) for e, r in runners.items()}  # the same noise in both engines
-    y = {e: np.asarray(r.dataset.test.y) for e, r in runners.items()}
-    tests = {e: x for e, (_, x) in data.items()}
+    tests = {e: (data[e][1], np.asarray(r.dataset.test.y)) for e, r in runners.items()}
     out = []
     for train_engine, runner in runners.items():
-        for name in NETWORKS:
-            cfg = motion.trained_config(cfgs[name], column)
-            runs = runner.train_runs(cfg, ("z",), seeds, desc=f"{train_engine} {name}")
-            models = runner.models(cfg, seeds, dims="z")
-            for test_engine, x_test in tests.items():
-                correct = np.stack([m.predict_proba(x_test).argmax(1) == y[test_engine] for m in models])
-                out.append(Cross(name, train_engine, test_engine, column, correct, runs.n_failed))
         x_train = data[train_engine][0]
-        labels = [runner.rocket("z", T, s, tests, train_x=None if column.noise is None else x_train) for s in seeds]
-        for test_engine in tests:
-            out.append(Cross("minirocket", train_engine, test_engine, column,
-                             np.stack([lab[test_engine] == y[test_engine] for lab in labels])))
-        ds = runner.dataset
-        for test_engine, x_test in tests.items():  # the rule chosen on the training engine's split
-            rules = measure.simple_rules(observe.height_only(x_train), ds.train.y, observe.height_only(x_test),
-                                         y[test_engine], ds.fps, contact_height, motion.RULE_FEATURES)
-            out.append(Cross("rule", train_engine, test_engine, column, measure.best_rule(rules)["correct"][None]))
+        fitted: list[tuple[learners.Learner, np.ndarray | None]] = [
+            (learners.Network(name, camera.trained_config(cfgs[name], column), seeds, desc=f"{train_engine} {name}"),
+             None) for name in NETWORKS]
+        fitted += [(learners.Rocket("z", T, seeds), None if column.noise is None else x_train),
+                   (learners.Rule(camera.RULE_FEATURES, contact_height), x_train)]  # chosen on the training engine
+        for learner, train_x in fitted:
+            s = learner.score(runner, train_x, tests)
+            out += [Cross(learner.name, train_engine, test_engine, column, s.correct[test_engine], s.failed)  # type: ignore[arg-type]
+                    for test_engine in tests]
     return out
 
 
-def transfer(entries: Sequence[Cross], learner: Learner, column: motion.Column) -> dict[Engine, Interval]:
+def transfer(entries: Sequence[Cross], learner: Learner, column: camera.Column) -> dict[Engine, Interval]:
     """What ``learner`` loses when the test engine is not its training engine, in ``column``: for each training
     engine, the accuracy on the other engine minus that on its own (paired on the same throws), with a
     bootstrap interval."""
@@ -343,20 +343,20 @@ def paired_throws(prior: SynthConfig, engine: Engine, n: int = PAIRED_THROWS, se
     return Paired(engine, masses, np.linalg.norm(x[1] - x[0], axis=2), cfg.fps)
 
 
-def best_learner(entries: Sequence[Cross], column: motion.Column) -> Learner:
+def best_learner(entries: Sequence[Cross], column: camera.Column) -> Learner:
     """The chapter's best learner: of :data:`LEARNERS`, the one with the highest accuracy in ``column`` trained and
     tested in the same engine, both engines' test throws together (ties: the first)."""
     score = {n: np.mean([_find(entries, n, column, e, e).correct.mean() for e in ENGINES]) for n in LEARNERS}
     return max(LEARNERS, key=lambda n: score[n])
 
 
-def mass_configs(cfgs: Mapping[Network, TrainConfig], learner: Learner, column: motion.Column,
+def mass_configs(cfgs: Mapping[Network, TrainConfig], learner: Learner, column: camera.Column,
                  seeds: tuple[int, ...]) -> list[TrainConfig]:
     """The runs of the mass-only test: ``learner``'s configuration in ``column`` for each seed (none for a learner
     that is not a network)."""
     if learner not in NETWORKS:
         return []
-    return [dataclasses.replace(motion.trained_config(cfgs[learner], column), seed=s) for s in seeds]  # type: ignore[index]
+    return [dataclasses.replace(camera.trained_config(cfgs[learner], column), seed=s) for s in seeds]  # type: ignore[index]
 
 
 @dataclass(frozen=True, eq=False)
@@ -390,7 +390,7 @@ class MassTest:
 
 
 def mass_test(runner: Runner, engine: Engine, learner: Learner, cfgs: Mapping[Network, TrainConfig],
-              column: motion.Column, seeds: tuple[int, ...], contact_height: float) -> MassTest:
+              column: camera.Column, seeds: tuple[int, ...], contact_height: float) -> MassTest:
     """``learner`` trained on the mass-only data set's training split (``runner`` on it: :func:`mass_only_runner`)
     in ``column``'s condition and tested on its test split, as :func:`cross_entries` trains it."""
     ds: Dataset = runner.dataset
@@ -401,13 +401,12 @@ def mass_test(runner: Runner, engine: Engine, learner: Learner, cfgs: Mapping[Ne
     if learner in NETWORKS:
         runs = runner.rows(mass_configs(cfgs, learner, column, seeds), desc=f"{engine} mass only")
         correct, failed = runs.correct(), runs.n_failed
-    elif learner == "minirocket":
-        train_x = None if column.noise is None else x_train
-        correct = np.stack([runner.rocket("z", T, s, {"test": x_test}, train_x=train_x)["test"] == y for s in seeds])
     else:
-        rules = measure.simple_rules(observe.height_only(x_train), ds.train.y, observe.height_only(x_test), y,
-                                     ds.fps, contact_height, motion.RULE_FEATURES)
-        correct, used = measure.best_rule(rules)["correct"][None], ()
+        fit: learners.Learner = (learners.Rocket("z", T, seeds) if learner == "minirocket"
+                                 else learners.Rule(camera.RULE_FEATURES, contact_height))
+        scores = fit.score(runner, None if learner == "minirocket" and column.noise is None else x_train,
+                           {"test": (x_test, y)})
+        correct, used = scores.correct["test"], scores.seeds
     return MassTest(engine, learner, np.asarray(correct, bool), used, failed, ds.key)
 
 
@@ -496,12 +495,12 @@ def agreement_numbers(diff: Mapping[Feature, np.ndarray],
                              "iqr": "interquartile range", "mean": "mean [95 % CI]", "same": "same count"})
 
 
-def _find(entries: Sequence[Cross], learner: Learner, column: motion.Column, train: Engine, test: Engine) -> Cross:
+def _find(entries: Sequence[Cross], learner: Learner, column: camera.Column, train: Engine, test: Engine) -> Cross:
     return next(x for x in entries if x.learner == learner and x.column == column and x.train == train
                 and x.test == test)
 
 
-def cross_numbers(entries: Sequence[Cross], cols: Sequence[motion.Column],
+def cross_numbers(entries: Sequence[Cross], cols: Sequence[camera.Column],
                   length: float) -> tuple[dict[Learner, dict[View, dict[Pair, Number]]], Table]:
     """Every learner trained in each engine and tested in each, and the table of them."""
     out: dict[Learner, dict[View, dict[Pair, Number]]] = {}
@@ -528,7 +527,7 @@ OUTCOME_WORDS: dict[Outcome, str] = {
 """What each :data:`Outcome` says, in the transfer table."""
 
 
-def transfer_numbers(entries: Sequence[Cross], cols: Sequence[motion.Column]) -> tuple[
+def transfer_numbers(entries: Sequence[Cross], cols: Sequence[camera.Column]) -> tuple[
         dict[Learner, dict[View, dict[Engine, Number]]], Table, dict[tuple[Learner, View], Outcome]]:
     """What each learner loses when the engine changes, its table, and each (learner, view)'s outcome."""
     out: dict[Learner, dict[View, dict[Engine, Number]]] = {}
@@ -635,7 +634,7 @@ class AnotherEngine:
     """Per test throw, Bullet minus MuJoCo: name -> (n,)."""
     test_y: np.ndarray
     """(n,) the test throws' labels."""
-    columns: tuple[motion.Column, ...]
+    columns: tuple[camera.Column, ...]
     """The cross-engine conditions."""
     configs: dict[Network, TrainConfig]
     """The networks' configurations."""
@@ -743,12 +742,12 @@ def compute(runner: Runner, tracker: TrackerError | observe.Observation | None =
     mass-only test of the chapter's best learner in each engine (its runs asked for once that learner is known) and
     the paired check.
 
-    ``tracker``: the calibrated tracker (default ``runner.observation()``, its error model fitted on rendered
+    ``tracker``: the calibrated tracker (default ``calibration.observation(runner)``, its error model fitted on rendered
     throws)."""
-    runners = {e: runner.in_engine(e) for e in ENGINES}
+    runners = {e: engine_runner(runner, e) for e in ENGINES}
     prior, p = runner.synth_config, runner.preset
     mj, bt = (runners[e].dataset for e in ENGINES)
-    cols = columns(runner.observation() if tracker is None else tracker)
+    cols = columns(calibration.observation(runner) if tracker is None else tracker)
     cfgs = configs(runner)
     runner.prefetch(plan(runners, cfgs, cols, p.grid_seeds, p.seeds), desc="both engines")
     diff = agreement(mj.test.x, bt.test.x, mj.fps, prior.shape.rest_height)
@@ -760,7 +759,7 @@ def compute(runner: Runner, tracker: TrackerError | observe.Observation | None =
     moved, transfer_table, outcomes = transfer_numbers(entries, cols)
     in_engine = {e: r.seed_runs(cfgs["peephole_positions"]) for e, r in runners.items()}
     table1, engine_table1 = table1_numbers(in_engine)
-    exact = number(ceiling.exact_ceiling(prior, motion.AIR_OFF_PARAMETERS),
+    exact = number(ceiling.exact_ceiling(prior, camera.AIR_OFF_PARAMETERS),
                    "exact ceiling of the priors (both engines: the same draws)")
     exact_col = next(c for c in cols if c.noise is None)  # a mass signal is sub-millimetre: exact positions
     learner = best_learner(entries, exact_col)
@@ -773,7 +772,7 @@ def compute(runner: Runner, tracker: TrackerError | observe.Observation | None =
              for e, r in mass_runners.items()}
     mass, mass_table = mass_numbers(tests)
     mass_prior = SynthConfig.from_dict(mass_runners["mujoco"].dataset.meta["config"])
-    mass_ceiling = number(ceiling.exact_ceiling(mass_prior, motion.AIR_OFF_PARAMETERS),
+    mass_ceiling = number(ceiling.exact_ceiling(mass_prior, camera.AIR_OFF_PARAMETERS),
                           "exact ceiling of the mass-only priors (the same restitution and friction)")
     paired = {e: paired_throws(prior, e, seed=int(runner.dataset.meta["seed"])) for e in ENGINES}
     pairs, paired_table = paired_numbers(paired)

@@ -8,7 +8,7 @@
 2. whether accuracy falls at the longest input: the longest minus the best length, paired on the test throws,
    against the paper's claim that it falls (:func:`drops`);
 3. what the shortest windows hold: the one-feature rules of the data chapter on exactly the window the network
-   sees (``study.chapters.cues.window_cues``);
+   sees (``study.methods.windows.window_cues``);
 4. the paper's explanation (vanishing or exploding gradients), one factor at a time at the longest input:
    truncation (Table 1's, or the whole input) x the forget gates' start (constant, or chrono), and the share of
    test objects still moving in the input's last frames (:func:`factorial`, :func:`still_moving`).
@@ -26,8 +26,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from study.chapters import cues
 
+from study.methods import windows
 from study.runs import paper, stats
 
 from study.report import verdicts
@@ -145,9 +145,30 @@ class Sweep:
         return self.runs.where(dims=dims, length=length).correct()
 
 
+def length_runs(runner: Runner, cfg: TrainConfig) -> Runs:
+    """Accuracy against input length: one run per (dims, length, seed) at ``cfg``, labelled ``frames``."""
+    cfgs = paper.length_configs(cfg, runner.preset)
+    return runner.rows(cfgs, desc="lengths").labelled({"frames": c.n_frames(runner.fps)} for c in cfgs)
+
+
+def long_memory_runs(runner: Runner, cfg: TrainConfig) -> Runs:
+    """The length sweep at the preset's long lengths with a memory that spans the input (chrono
+    initialisation, full BPTT): one run per (dims, length, seed), labelled ``frames``."""
+    cfgs = paper.long_memory_configs(cfg, runner.preset, runner.fps)
+    return runner.rows(cfgs, desc="long memory").labelled({"frames": c.n_frames(runner.fps)} for c in cfgs)
+
+
+def factorial_runs(runner: Runner, cfg: TrainConfig) -> Runs:
+    """Figure 4's explanation one factor at a time (``paper.factorial_configs``): one run per (truncation,
+    forget start, dims, seed) at the longest input, labelled ``truncated`` and ``forget``."""
+    plan = paper.factorial_configs(cfg, runner.preset, runner.fps)
+    rows = runner.rows([c for _, _, c in plan], desc="truncation x forget start")
+    return rows.labelled({"truncated": trunc, "forget": forget} for trunc, forget, _ in plan)
+
+
 def sweep(runner: Runner, cfg: TrainConfig) -> Sweep:
     """The length sweep of ``cfg`` and its long-memory variant."""
-    runs, long = runner.length_sweep(cfg), runner.long_memory(cfg)
+    runs, long = length_runs(runner, cfg), long_memory_runs(runner, cfg)
     by = ("dims", "length")
     return Sweep(runs, tuple(stats.summarise(runs, by)), long, tuple(stats.summarise(long, by)))
 
@@ -194,8 +215,8 @@ class Cells:
 
 
 def factorial(runner: Runner, cfg: TrainConfig) -> dict[Dims, Cells]:
-    """The runs of ``runner.factorial`` by input and cell."""
-    runs = runner.factorial(cfg)
+    """The runs of :func:`factorial_runs` by input and cell."""
+    runs = factorial_runs(runner, cfg)
     label = {"truncated": f"{cfg.truncation} frames", "whole": "the whole input"}  # the runner's labels
     return {d: Cells({(t, f): runs.where(dims=d, truncated=label[t], forget=f) for t in TRUNCATIONS for f in FORGETS})
             for d in ORDER}
@@ -220,7 +241,7 @@ class Length:
     cells: dict[Dims, Cells]
     """The 2 x 2's runs."""
     window: list[dict[str, Any]]
-    """``cues.window_cues`` rows, one per length."""
+    """``windows.window_cues`` rows, one per length."""
     length_table: Table
     """Every length, every seed."""
     window_table: Table
@@ -407,7 +428,7 @@ def compute(runner: Runner, cfg: TrainConfig | None = None) -> Length:
     diffs = drops(s)
     drop = {d: number(dv, f"longest input minus the best length, {NAMES[d]}", decision=verdicts.order(dv, -1),
                       signed=True) for d, dv in diffs.items()}  # the paper: the longest falls below
-    window = cues.window_cues(ds, p.lengths, runner.synth_config.shape.bounding_radius)
+    window = windows.window_cues(ds, p.lengths, runner.synth_config.shape.bounding_radius)
     window_numbers, window_table, why = _window(window, s)
     last = max(p.long_lengths)
     cells = factorial(runner, cfg)

@@ -3,7 +3,7 @@ ceiling of the priors.
 
 The chapter's table has a row per learner and a column per condition (:class:`Column`): the air on or off, and
 the positions exact or observed by a camera whose error is white noise of one pixel of a 1080-row camera at 4 m,
-the tracker's error as its fitted model draws it (``Runner.observation``: a per-throw offset and correlated noise,
+the tracker's error as its fitted model draws it (``calibration.observation``: a per-throw offset and correlated noise,
 one level in flight and another in contact, ``study.methods.tracker_model``), or white noise of one pixel of the
 same camera at 55 m (with the tracker's share of lost frames in every observed column). Each learner is trained
 on the condition it is tested on:
@@ -31,25 +31,19 @@ from typing import Literal, get_args
 
 import numpy as np
 
-from study.methods import ceiling
+from study.methods import ceiling, learners
+from study.methods.camera import (AIR_OFF_PARAMETERS, AIR_ON_PARAMETERS, AIRS, FAR, NEAR, ROWS_1080, RULE_FEATURES,  # noqa: F401
+                                  SHORT, VIEWS, Air, Column, Observed, View, column_ceiling, columns,
+                                  trained_config)
+from study.methods import calibration
 from study.report.reported import Number, Reported, count, named, number
 from study.runs.runner import Runner
 from study.report.text import Table, pct, pct_ci, seeds_ci
-from study.methods.tracker import TrackerError
-from study.learn import baseline
 from study.learn.config import TrainConfig
-from study.learn.inputs import observe_fields
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
-from study.simulate import measure, observe
-from study.simulate.data import Dataset, Split
+from study.simulate import observe
 from study.simulate.synth import SynthConfig
 
-Air = Literal["air_on", "air_off"]
-"""The two data sets: the study's throws (air drag and added mass on), and the same throws without air."""
-View = Literal["exact", "near", "calibrated", "far"]
-"""How each air setting's positions are seen, in the table's order."""
-Observed = Literal["near", "calibrated", "far"]
-"""The views through a camera."""
 Network = Literal["peephole_positions", "peephole_velocity", "gru_velocity"]
 """The networks trained on each column's condition, each at its own configuration."""
 Trained = Literal[Network, "peephole_exact_trained"]
@@ -57,115 +51,12 @@ Trained = Literal[Network, "peephole_exact_trained"]
 Learner = Literal[Trained, "minirocket", "physics", "rule"]
 """Every row of the table, the ceiling aside."""
 
-AIRS: tuple[Air, ...] = get_args(Air)
-VIEWS: tuple[View, ...] = get_args(View)
 NETWORKS: tuple[Network, ...] = get_args(Network)
 LEARNERS: tuple[Learner, ...] = get_args(Learner)
 SHOWN: tuple[Learner, ...] = tuple(n for n in LEARNERS if n != "peephole_exact_trained")
 """The learners the chapter's figure draws (the exact-trained row is the paper's network under another name)."""
-NAMES: dict[Learner, str] = {
-    "peephole_positions": "peephole LSTM, positions (the paper's)", "peephole_velocity": "peephole LSTM, with velocity",
-    "gru_velocity": "GRU, with velocity", "peephole_exact_trained": "peephole LSTM, positions, trained exact",
-    "minirocket": "MiniRocket, positions", "physics": "physics baseline", "rule": "best one-feature rule"}
+NAMES: dict[Learner, str] = learners.NAMES  # type: ignore[assignment]
 """Each learner in words."""
-SHORT: dict[View, str] = {"exact": "exact", "near": "1 px at 4 m", "calibrated": "tracker", "far": "1 px at 55 m"}
-"""Each view in a table's header."""
-
-ROWS_1080 = 1080
-"""Image rows of the camera whose pixel sets the two ends of the noise sweep."""
-NEAR, FAR = 4.0, 55.0
-"""Camera distances, metres: as the rendered videos are filmed, and where one pixel is about 4 cm."""
-RULE_FEATURES = ("bounces", "max_height_after_1s", "fall_acceleration")
-"""The one-feature rules a height alone allows (``study.simulate.measure.FEATURES``)."""
-AIR_OFF_PARAMETERS = ("restitution", "friction")
-"""What the Bayes rule is told without air: all a trajectory can carry of the class."""
-AIR_ON_PARAMETERS = ("restitution", "friction", "mass")
-"""With air, the mass too: drag makes it visible."""
-
-
-# ---------------------------------------------------------------------------------------------
-# The conditions
-
-
-@dataclass(frozen=True)
-class Column:
-    """One condition of the table: the air, and the camera's error (None: exact positions)."""
-
-    air: bool
-    """Air drag and added mass on (the study's data) or off (the same throws without air)."""
-    name: View
-    """How the positions are seen."""
-    noise: float | None
-    """The camera and tracker's position error, metres (with a tracker model, its standard deviation in flight,
-    offset included); None for exact positions."""
-    drop: float = 0.0
-    """The share of frames the tracker loses."""
-    label: str = ""
-    """What the column is, in words, for the table's header and caption."""
-    tracker: observe.TrackerNoise | None = None
-    """The tracker's error model the column draws from; None: white noise of ``noise``."""
-
-    @property
-    def air_key(self) -> Air:
-        return "air_on" if self.air else "air_off"
-
-    @property
-    def key(self) -> str:
-        """``air_on.exact`` and so on: the column's part of a result's name."""
-        return f"{self.air_key}.{self.name}"
-
-    @property
-    def heading(self) -> str:
-        """The column in a table's header: ``air on, 1 px at 4 m``."""
-        return f"{'air on' if self.air else 'air off'}, {SHORT[self.name]}"
-
-    def observation(self) -> observe.Observation | None:
-        """How the column observes a throw (None: exactly)."""
-        if self.noise is None:
-            return None
-        if self.tracker is not None:
-            return observe.Observation(tracker=self.tracker, drop=self.drop)
-        return observe.Observation(noise=self.noise, drop=self.drop)
-
-    def inputs(self, ds: Dataset, T: int) -> tuple[np.ndarray, np.ndarray]:
-        """(training, test) inputs of ``ds``'s first ``T`` frames, (n, T, 3) metres: exact, or observed with
-        the column's error. Each column draws its own noise, the same for every learner and every engine (the
-        seed depends on the column alone), the training split's apart from the test split's."""
-        ob = self.observation()
-        if ob is None:
-            return ds.train.x[:, :T], ds.test.x[:, :T]
-        salt = 100 * (2 if self.air else 3) + VIEWS.index(self.name)
-        return ob.observe(ds.train.x[:, :T], ds.fps, seed=salt + 50), ob.observe(ds.test.x[:, :T], ds.fps, seed=salt)
-
-
-def columns(calibrated: observe.Observation | TrackerError) -> list[Column]:
-    """The table's eight columns: air on and off, each exact, white noise of one pixel of a 1080-row camera at
-    :data:`NEAR` m, the calibrated tracker (``Runner.observation``: its fitted error model, or the white noise a
-    ``TrackerError`` gives), and white noise of one pixel at :data:`FAR` m, every observed one losing the
-    calibrated share of frames."""
-    ob = calibrated if isinstance(calibrated, observe.Observation) else calibrated.observation()
-    near = observe.Camera(distance=NEAR, rows=ROWS_1080).metres_per_pixel()
-    far = observe.Camera(distance=FAR, rows=ROWS_1080).metres_per_pixel()
-    if ob.tracker is not None:
-        tracked = (ob.tracker.position_sd(), f"the calibrated tracker's fitted error ({ob.tracker.describe()})")
-    else:
-        tracked = (ob.noise, f"the calibrated tracker, white noise of {1000 * ob.noise:.1f} mm")
-    views: list[tuple[View, float | None, str]] = [
-        ("exact", None, "exact positions"),
-        ("near", near, f"1 px of a {ROWS_1080}-row camera at {NEAR:g} m ({1000 * near:.1f} mm)"),
-        ("calibrated", *tracked),
-        ("far", far, f"1 px of a {ROWS_1080}-row camera at {FAR:g} m ({1000 * far:.1f} mm)")]
-    return [Column(air, name, noise, 0.0 if noise is None else ob.drop, label,
-                   ob.tracker if name == "calibrated" else None)
-            for air in (True, False) for name, noise, label in views]
-
-
-def column_ceiling(cfg: SynthConfig, column: Column) -> float:
-    """The exact ceiling of a column (``study.methods.ceiling``): with air, told the mass (which drag makes
-    visible) as well as the restitution and friction; without, the restitution and friction."""
-    return ceiling.exact_ceiling(cfg, AIR_ON_PARAMETERS if column.air else AIR_OFF_PARAMETERS)
-
-
 # ---------------------------------------------------------------------------------------------
 # The networks' configurations and runs
 
@@ -177,14 +68,6 @@ def configs(runner: Runner) -> dict[Trained, TrainConfig]:
     return {"peephole_positions": runner.table1_config(), "peephole_velocity": runner.table1_config("velocity"),
             "gru_velocity": dataclasses.replace(runner.winner("gru"), inputs="velocity"),
             "peephole_exact_trained": runner.table1_config()}
-
-
-def trained_config(cfg: TrainConfig, column: Column) -> TrainConfig:
-    """``cfg`` trained on the column's condition: exact, or observed with its noise and lost frames."""
-    ob = column.observation()
-    if ob is None:
-        return dataclasses.replace(cfg, dims="z")
-    return dataclasses.replace(cfg, dims="z", observe="fixed", **observe_fields(ob))
 
 
 def network_configs(cfgs: Mapping[Trained, TrainConfig], column: Column) -> dict[Trained, TrainConfig]:
@@ -231,57 +114,27 @@ class Entry:
         return bootstrap_accuracy(self.correct)
 
 
-def network_entries(runner: Runner, cfgs: Mapping[Trained, TrainConfig], column: Column, seeds: tuple[int, ...],
-                    x_test: np.ndarray) -> list[Entry]:
-    """Every network row of ``column`` on ``runner``'s data: its runs (cached or trained) and its models' answers
-    on the column's test inputs ``x_test`` (n, T, 3) metres."""
-    y = np.asarray(runner.dataset.test.y)
-    out = []
-    for name, cfg in network_configs(cfgs, column).items():
-        runs = runner.train_runs(cfg, ("z",), seeds, desc=f"{column.key} {name}")
-        models = runner.models(cfg, seeds, dims="z")
-        correct = np.stack([m.predict_proba(x_test).argmax(1) == y for m in models])
-        out.append(Entry(name, column, correct, runs.n_failed, float(np.mean(runs.val_accuracies())),
-                         seeds=tuple(seeds)))
-    return out
-
-
-def rocket_entry(runner: Runner, column: Column, seeds: tuple[int, ...], x_train: np.ndarray,
-                 x_test: np.ndarray) -> Entry:
-    """MiniRocket on Z, fitted once per seed on the column's training inputs (the cached exact fit in an exact
-    column) and scored on its test inputs, both (n, T, 3) metres."""
-    y = np.asarray(runner.dataset.test.y)
-    train_x = None if column.noise is None else x_train  # None: the cached fit on the exact split
-    labels = [runner.rocket("z", x_test.shape[1], s, {"test": x_test}, train_x=train_x)["test"] for s in seeds]
-    return Entry("minirocket", column, np.stack([p == y for p in labels]), seeds=tuple(seeds))
-
-
-def physics_entry(ds: Dataset, column: Column, x_train: np.ndarray, x_test: np.ndarray) -> Entry:
-    """The physics baseline on Z, fitted on the column's training inputs and scored on its test inputs."""
-    T = x_test.shape[1]
-    observed = dataclasses.replace(ds, train=Split(x_train, ds.train.y, ds.train.params))
-    phys = baseline.fit(observed, "z", T / ds.fps)
-    return Entry("physics", column, (phys.predict_proba(x_test).argmax(1) == np.asarray(ds.test.y))[None])
-
-
-def rule_entry(ds: Dataset, column: Column, x_train: np.ndarray, x_test: np.ndarray, contact_height: float) -> Entry:
-    """The best one-feature rule of :data:`RULE_FEATURES` on the height alone, chosen on the column's training
-    inputs (``measure.best_rule``) and scored on its test inputs."""
-    rules = measure.simple_rules(observe.height_only(x_train), ds.train.y, observe.height_only(x_test), ds.test.y,
-                                 ds.fps, contact_height, RULE_FEATURES)
-    best = measure.best_rule(rules)
-    return Entry("rule", column, best["correct"][None], feature=best["feature"])
-
-
 def column_entries(runner: Runner, cfgs: Mapping[Trained, TrainConfig], column: Column, seeds: tuple[int, ...],
                    contact_height: float) -> list[Entry]:
     """Every learner of :data:`LEARNERS` trained and tested on ``column``, with ``runner`` on the column's data
-    (air on or off), in the table's order."""
+    (air on or off), in the table's order: the networks trained on the column's condition, MiniRocket once per
+    seed (the cached exact fit in an exact column), the physics baseline and the best rule of
+    :data:`RULE_FEATURES` on the height alone, each fitted on the column's training inputs and scored on its test
+    inputs (``study.methods.learners``)."""
     ds = runner.dataset
-    x_train, x_test = column.inputs(ds, cfgs["peephole_positions"].n_frames(ds.fps))
-    out = network_entries(runner, cfgs, column, seeds, x_test)
-    out += [rocket_entry(runner, column, seeds, x_train, x_test), physics_entry(ds, column, x_train, x_test),
-            rule_entry(ds, column, x_train, x_test, contact_height)]
+    T = cfgs["peephole_positions"].n_frames(ds.fps)
+    x_train, x_test = column.inputs(ds, T)
+    tests = {"test": (x_test, ds.test.y)}
+    fitted: list[tuple[learners.Learner, np.ndarray | None]] = [
+        (learners.Network(name, cfg, seeds, desc=f"{column.key} {name}"), None)
+        for name, cfg in network_configs(cfgs, column).items()]
+    fitted += [(learners.Rocket("z", T, seeds), None if column.noise is None else x_train),
+               (learners.Physics("z", T / ds.fps), x_train),
+               (learners.Rule(RULE_FEATURES, contact_height), x_train)]
+    out = []
+    for learner, train_x in fitted:
+        s = learner.score(runner, train_x, tests)
+        out.append(Entry(learner.name, column, s.correct["test"], s.failed, s.val, s.feature, s.seeds))  # type: ignore[arg-type]
     return sorted(out, key=lambda e: LEARNERS.index(e.learner))
 
 
@@ -443,7 +296,7 @@ class Motion:
     n_failed: int
     """Of those, runs that failed to train."""
     fitted_on: str = ""
-    """What the calibrated column's error model was fitted on, in words (``Runner.tracker_fit``)."""
+    """What the calibrated column's error model was fitted on, in words (``calibration.tracker_fit``)."""
 
     def curve(self, learner: Learner, air: bool) -> tuple[np.ndarray, list[Interval]]:
         """One learner's accuracy against the camera's error at one air setting: (k,) errors in millimetres (0
@@ -613,10 +466,10 @@ def compute(runner: Runner, cfgs: Mapping[Trained, TrainConfig] | None = None,
     network run at once (so every core stays busy), then every entry of the table and the result.
 
     ``cfgs``: each network row's configuration (default :func:`configs`); ``calibrated``: the calibrated tracker's
-    observation (default ``runner.observation()``, the error model fitted on rendered throws)."""
+    observation (default ``calibration.observation(runner)``, the error model fitted on rendered throws)."""
     cfgs = configs(runner) if cfgs is None else cfgs
-    fitted_on = runner.tracker_fit().fitted_on if calibrated is None else ""
-    calibrated = runner.observation() if calibrated is None else calibrated
+    fitted_on = calibration.tracker_fit(runner).fitted_on if calibrated is None else ""
+    calibrated = calibration.observation(runner) if calibrated is None else calibrated
     cols = columns(calibrated)
     on = {True: runner, False: runner.air_off()}
     seeds = runner.preset.grid_seeds

@@ -56,13 +56,17 @@ from study.methods.videos import (  # noqa: F401  (re-exported: the chapter's vi
 )
 from study.report.reported import Number, Reported, Verdict, named, number
 from study.report.text import Table, pct, pct_ci
+from study.learn import train
 from study.learn.config import Inputs, TrainConfig
+from study.methods import calibration
+from study.runs.stats import scored
+from study.simulate import observe
 from study.learn.metrics import Interval, wilson
 from study.see import render, track, video
 from study.simulate import measure
 
-if TYPE_CHECKING:  # the runner imports this module (its rendered throws): a type here, not an import cycle
-    from study.runs.runner import Recommendation, Runner
+if TYPE_CHECKING:
+    from study.runs.runner import Runner
 
 # ---------------------------------------------------------------------------------------------
 # Videos: rendered with a known answer, or read from a folder with a manifest (study.methods.videos)
@@ -371,18 +375,59 @@ def heights(model: Model, group: Literal["rendered", "real"], videos: Sequence[V
 # The experiment's steps
 
 
-def candidates(runner: Runner) -> dict[str, TrainConfig]:
-    """The four Z models a camera could use: the paper's network reading positions (Table 1's point) or positions
-    and velocity (its own grid's point), each trained on exact positions or on random observations."""
-    return runner.candidates({"positions": runner.table1_config(), "velocity": runner.table1_config("velocity")})
+@dataclass(frozen=True)
+class Recommendation:
+    """The Z model a camera in a car should use (:func:`recommend`), chosen on observed validation throws."""
+
+    choice: str
+    """The chosen candidate's name (``"positions, exact"`` and so on, :func:`candidates`)."""
+    val: dict[str, Interval]
+    """Each candidate's accuracy on the observed validation throws, with its bootstrap interval."""
+    models: dict[str, train.TrainedModel]
+    """Each candidate's trained model."""
+
+    @property
+    def model(self) -> train.TrainedModel:
+        """The chosen model."""
+        return self.models[self.choice]
+
+
+def candidates(runner: Runner, cfgs: dict[str, TrainConfig] | None = None,
+               ob: observe.Observation | None = None) -> dict[str, TrainConfig]:
+    """The Z models a camera could use: each of ``cfgs`` (name -> config; default: the paper's network reading
+    positions at Table 1's point and reading positions and velocity at its own grid's point) trained on exact
+    positions and on random observations as the calibrated tracker (or ``ob``) would see them (names suffixed
+    ', exact' and ', randomised')."""
+    cfgs = cfgs or {"positions": runner.table1_config(), "velocity": runner.table1_config("velocity")}
+    out = {}
+    for name, cfg in cfgs.items():
+        z = dataclasses.replace(cfg, dims="z")
+        out[f"{name}, exact"] = z
+        out[f"{name}, randomised"] = calibration.randomised_config(runner, z, ob)
+    return out
+
+
+def recommended(runner: Runner, cands: dict[str, TrainConfig], seed: int = 0,
+                ob: observe.Observation | None = None) -> Recommendation:
+    """Of ``cands`` (name -> config; :func:`candidates`), the one with the highest accuracy on ``seed``'s
+    validation trajectories observed as the calibrated tracker (or ``ob``) observes them (never the test split)."""
+    ob = ob or calibration.observation(runner)
+    models = {k: runner.trained(dataclasses.replace(c, dims="z", seed=seed)) for k, c in cands.items()}
+    first = next(iter(cands.values()))
+    _, va = train.split_train_val(len(runner.dataset.train.y), first.val_fraction, seed)
+    T = first.n_frames(runner.fps)
+    x_val = ob.observe(runner.dataset.train.x[va, :T], runner.fps, seed=6)
+    val = {k: scored([m], x_val, runner.dataset.train.y[va]) for k, m in models.items()}
+    choice = max(val, key=lambda k: val[k].value)  # ties: the first candidate
+    return Recommendation(choice, val, models)
 
 
 def recommend(runner: Runner) -> Recommendation:
     """Of :func:`candidates` (seed 0, trained together), the one with the highest accuracy on the validation throws
-    observed as the tracker observes them (``Runner.recommended``; never the test split or the videos)."""
+    observed as the tracker observes them (:func:`recommended`; never the test split or the videos)."""
     cands = candidates(runner)
     runner.prefetch([(runner, [dataclasses.replace(c, seed=0) for c in cands.values()], False)], desc="candidates")
-    return runner.recommended(cands)
+    return recommended(runner, cands)
 
 
 def scale_sweep(model: Model, rendered: Sequence[Video], real: Sequence[Video], tracks_rendered: dict[str, Tracked],
@@ -518,7 +563,7 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
     (:func:`real_clips`), classified by Table 1's Z model (seed 0) or by ``model`` if given, and by the model
     :func:`recommend` chooses. Every run is cached; the videos are rendered and tracked once."""
     tm = model if model is not None else runner.trained(runner.table1_config())  # Table 1's Z model, seed 0
-    rendered, rcfg = runner.rendered()
+    rendered, rcfg = calibration.rendered(runner)
     real = list(real)
     pixel = tracking_error(rendered)
     tracks_r, tracks_q = track_all(rendered, progress=False), track_all(real, progress=False)
@@ -566,7 +611,7 @@ def reported(rec: Recommendation,
 def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
     out: dict[str, dict[str, Candidate]] = {}
     for name, iv in rec.val.items():
-        inputs, training = name.split(", ")  # "positions, exact" (Runner.candidates)
+        inputs, training = name.split(", ")  # "positions, exact" (candidates)
         out.setdefault(inputs, {})[training] = Candidate(
             number(iv, f"validation accuracy under the calibrated observation, {name}"))
     return out  # type: ignore[return-value]

@@ -37,6 +37,7 @@ from study.runs.runner import Runner
 from study.runs.runtable import Fitted, Run, Runs
 from study.report.text import Table, pct, pct_ci, pct_pm, points, runs_note, seeds_ci
 from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
+from study.learn import baseline, train
 from study.learn.inputs import rotated
 from study.learn.metrics import (PLATEAU_LOSS, Interval, between_share, bootstrap_accuracy, bootstrap_difference,
                                  hierarchical_bootstrap, t_interval)
@@ -669,6 +670,31 @@ class Table1:
 # Each part of the result
 
 
+def protocol_runs(runner: Runner, cfg: TrainConfig) -> Runs:
+    """Every protocol of ``paper.protocol_changes`` at ``cfg``, for Z and X, Y, Z, validation only: one run per
+    (protocol, dims, seed), labelled ``protocol``."""
+    plan = paper.protocol_plan(cfg, runner.preset)
+    rows = runner.rows([c for _, c in plan], test=False, desc="protocols")
+    return rows.labelled({"protocol": name} for name, _ in plan)
+
+
+def ablation_runs(runner: Runner, winners: dict[Cell, TrainConfig]) -> Runs:
+    """Each cell at its own grid winner on Z with the test seeds: one run per (cell, seed)."""
+    return runner.rows(paper.ablation_configs(winners, runner.preset), desc="ablation")
+
+
+def baseline_runs(runner: Runner) -> dict[Dims, Fitted]:
+    """The physics baseline for Z and X, Y, Z at the preset's length, fitted once each (it has no seed)."""
+    out = {}
+    for d in paper.BOTH:
+        m = baseline.fit(runner.dataset, d, runner.preset.length)
+        pred = m.predict_proba(runner.dataset.test.x).argmax(axis=1)
+        res = train.metrics(runner.dataset.test.y, pred)
+        out[d] = Fitted(d, res["accuracy"], pred == np.asarray(runner.dataset.test.y), res["per_class_accuracy"],
+                        m.coefficients)
+    return out
+
+
 def _grid_table(g: GridSearch, p: object) -> tuple[Table, int, int]:
     chosen = {(c, "positions"): w for c, w in g.winners.items()} | {("peephole", "velocity"): g.velocity_config}
     labelled = [(cell, "positions", g.grids[cell]) for cell in g.grids] + [("peephole", "velocity", g.velocity)]
@@ -749,7 +775,7 @@ def _row(runner: Runner, inputs: Inputs, cfg: TrainConfig, s: Seeds, d: Dims) ->
 
 
 def _ablation(runner: Runner, winners: dict[Cell, TrainConfig]) -> tuple[Ablation, Table, dict[Cell, Interval]]:
-    abl = runner.ablation(winners)
+    abl = ablation_runs(runner, winners)
     cells = runner.preset.cells
     correct = {c: abl.where(cell=c).correct() for c in cells}
     summ = {c: stats.summary(abl.where(cell=c)) for c in cells}
@@ -848,7 +874,7 @@ def compute(runner: Runner) -> Table1:
     velocity = choice.config
     prefetch_velocity(runner, velocity)
     grid_table, grid_failed, grid_runs = _grid_table(g, p)
-    protocol_numbers, protocol_table, facts = _protocols(runner.protocol_runs(g.config))
+    protocol_numbers, protocol_table, facts = _protocols(protocol_runs(runner, g.config))
     cfgs: dict[Network, TrainConfig] = {"positions": g.config, "velocity": velocity, "speed": speed_config(velocity),
                                         "rotated": rotated_config(g.config)}
     seeds: dict[Network, Seeds] = {"positions": seed_runs(runner, g.config), "velocity": seed_runs(runner, velocity),
@@ -874,7 +900,7 @@ def compute(runner: Runner) -> Table1:
     positions = rows["positions"]
     overall = verdicts.combined([positions[d].paper_way.decision for d in ORDER])  # type: ignore[misc]
     ablation, ablation_table, abl_diffs = _ablation(runner, g.winners)
-    base_acc, base_minus, baseline_table, beats = _baseline(runner.baseline_runs(), seeds["positions"].first)
+    base_acc, base_minus, baseline_table, beats = _baseline(baseline_runs(runner), seeds["positions"].first)
     numbers = Numbers(
         GridNumbers(count(grid_failed, "grid runs that failed to train (all cells)")), protocol_numbers, positions,
         Velocity(rows["velocity"], number(diffs["velocity"], "with velocity: X, Y, Z minus Z only, mean over seeds",

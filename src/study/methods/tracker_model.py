@@ -248,7 +248,7 @@ class TrackerFit:
     """Lag-1 autocorrelation of the error with each video's mean removed, pooled (as measured, not corrected for
     the mean's removal)."""
     fitted_on: str = ""
-    """Which renders, in words (``Runner.tracker_fit`` sets it)."""
+    """Which renders, in words (``calibration.tracker_fit`` sets it)."""
 
     def observation(self) -> observe.Observation:
         """The fitted observation: the model's error and the tracker's share of lost frames."""

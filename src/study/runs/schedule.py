@@ -247,7 +247,7 @@ def ask(jobs: Sequence[Job], data_dir: str | Path, device: str = "cpu") -> None:
         for ds, c, t in missing:
             if ds.path is None:
                 raise StudyError(f"a planned build needs the data set of key {ds.key} as a file; save it first "
-                                 "(Runner.saved) so the builder can train its runs")
+                                 "(study.chapters.cues.saved) so the builder can train its runs")
             f.write(json.dumps({"dataset": str(ds.path), "config": dataclasses.asdict(c), "test": t}) + "\n")
     raise Pending(f"{len(missing)} runs are not trained yet; the build trains them with every chapter's, then "
                   "executes this chapter again")

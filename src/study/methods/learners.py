@@ -1,0 +1,170 @@
+"""Learners: the ways the study tells light from heavy, each fitted on a training split and scored on test splits
+through one interface, so the chapters that compare them (motion, engine, baselines) score them alike.
+
+A :class:`Learner` has a name, the training runs it needs (:meth:`Learner.configs`; none for a learner fitted on the
+spot) and :meth:`Learner.score`: which test throws it gets right, on each of several test inputs (the exact and the
+observed test split, or each engine's). The implementations:
+
+- :class:`Network`: a recurrent network's runs over seeds, trained (or read) by the runner;
+- :class:`Rocket`: MiniRocket fitted once per seed, cached like a run (``study.methods.rockets``);
+- :class:`Physics`: the physics baseline (``study.learn.baseline``), fitted on the spot;
+- :class:`Rule`: the best one-feature rule, chosen on the training split (``study.simulate.measure.best_rule``).
+
+    tests = {"exact": (x_test, y_test), "observed": (x_seen, y_test)}   # (n, T, 3) metres, (n,) labels
+    scores = Network("peephole", cfg, seeds=(0, 1, 2)).score(runner, None, tests)
+    scores.correct["observed"]                                          # (S, n) bool: seed s got throw i right
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
+
+from study.learn import baseline
+from study.learn.config import Dims, TrainConfig
+from study.methods.rockets import rocket_predictions
+from study.simulate import measure, observe
+
+if TYPE_CHECKING:
+    from study.runs.runner import Runner
+    from study.runs.runtable import Runs
+
+Tests = Mapping[str, tuple[np.ndarray, np.ndarray]]
+"""Test inputs by name: (x (n, T, 3) float, metres; y (n,) int labels)."""
+
+NAMES: dict[str, str] = {
+    "peephole_positions": "peephole LSTM, positions (the paper's)", "peephole_velocity": "peephole LSTM, with velocity",
+    "gru_velocity": "GRU, with velocity", "peephole_exact_trained": "peephole LSTM, positions, trained exact",
+    "minirocket": "MiniRocket, positions", "physics": "physics baseline", "rule": "best one-feature rule"}
+"""Each learner of the motion and engine chapters, in words."""
+
+
+def correct_of(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """(S, n) bool: model s (anything with ``predict_proba``) called throw i of ``x`` (n, T, 3) right."""
+    y = np.asarray(y)
+    return np.stack([m.predict_proba(x).argmax(1) == y for m in models])
+
+
+@dataclass(frozen=True)
+class Scores:
+    """Which test throws a learner got right, on each test input."""
+
+    correct: dict[str, np.ndarray]
+    """Test name -> (S, n) bool: seed s got throw i right (S = 1 for a learner without a seed)."""
+    failed: int = 0
+    """Seeds that failed to train."""
+    val: float | None = None
+    """Mean validation accuracy over the seeds, for the networks."""
+    feature: str = ""
+    """The feature a rule chose."""
+    seeds: tuple[int, ...] = ()
+    """The seeds of its runs (none for the physics baseline and the rules)."""
+    runs: Runs | None = field(default=None, compare=False, repr=False)
+    """A network's run records (their test accuracy on the exact test split, as trained)."""
+
+
+class Learner(Protocol):
+    """A way to tell light from heavy, fitted on a training split and scored on test inputs."""
+
+    name: str
+
+    def configs(self) -> list[TrainConfig]:
+        """The training runs it needs (none for a learner fitted on the spot)."""
+
+    def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
+        """Fitted on ``runner``'s training split (``x_train``, (n, T, 3) metres, in place of its positions where
+        given: an observed draw) and scored on each of ``tests``."""
+
+
+@dataclass(frozen=True)
+class Network:
+    """A network's runs at ``cfg`` on ``dims``, one per seed, trained or read by the runner (a network is trained on
+    the condition its config says; ``x_train`` is not used)."""
+
+    name: str
+    cfg: TrainConfig
+    seeds: tuple[int, ...]
+    dims: Dims = "z"
+    desc: str = ""
+    """What the progress bar says while its runs train."""
+
+    def configs(self) -> list[TrainConfig]:
+        return [dataclasses.replace(self.cfg, dims=self.dims, seed=s) for s in self.seeds]
+
+    def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
+        runs = runner.train_runs(self.cfg, (self.dims,), self.seeds, desc=self.desc or self.name)
+        models = runner.models(self.cfg, self.seeds, dims=self.dims) if tests else []  # loaded only to be scored
+        correct = {k: correct_of(models, x, y) for k, (x, y) in tests.items()}
+        return Scores(correct, runs.n_failed, float(np.mean(runs.val_accuracies())), seeds=tuple(self.seeds),
+                      runs=runs)
+
+
+@dataclass(frozen=True)
+class Rocket:
+    """MiniRocket on ``dims``'s first ``n_frames`` frames, fitted once per seed on the training split (the cached
+    exact fit when ``x_train`` is None) and cached like a run."""
+
+    dims: Dims
+    n_frames: int
+    seeds: tuple[int, ...]
+    name: str = "minirocket"
+
+    def configs(self) -> list[TrainConfig]:
+        return []
+
+    def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
+        xs = {k: x for k, (x, _) in tests.items()}
+        labels = [rocket_predictions(runner.dataset, self.dims, self.n_frames, s, xs, runner.data_dir, x_train)
+                  for s in self.seeds]
+        correct = {k: np.stack([lab[k] == np.asarray(y) for lab in labels]) for k, (_, y) in tests.items()}
+        return Scores(correct, seeds=tuple(self.seeds))
+
+
+@dataclass(frozen=True)
+class Physics:
+    """The physics baseline on ``dims``, fitted on the first ``length`` seconds of the training split."""
+
+    dims: Dims
+    length: float
+    """Input length, seconds."""
+    name: str = "physics"
+
+    def configs(self) -> list[TrainConfig]:
+        return []
+
+    def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
+        ds = runner.dataset
+        if x_train is not None:
+            ds = dataclasses.replace(ds, train=dataclasses.replace(ds.train, x=x_train))
+        fitted = baseline.fit(ds, self.dims, self.length)
+        return Scores({k: (fitted.predict_proba(x).argmax(1) == np.asarray(y))[None] for k, (x, y) in tests.items()})
+
+
+@dataclass(frozen=True)
+class Rule:
+    """The best one-feature rule of ``features`` (None: every feature), chosen on the training split; with
+    ``height_only``, the rules read the height alone (what one camera gives)."""
+
+    features: tuple[str, ...] | None
+    contact: float
+    """The shape's bounding radius, metres (where the first fall ends)."""
+    height_only: bool = True
+    name: str = "rule"
+
+    def configs(self) -> list[TrainConfig]:
+        return []
+
+    def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
+        ds = runner.dataset
+        seen = observe.height_only if self.height_only else (lambda x: x)
+        xtr = ds.train.x if x_train is None else x_train
+        correct, feature = {}, ""
+        for k, (x, y) in tests.items():
+            rules = measure.simple_rules(seen(xtr), ds.train.y, seen(x), y, ds.fps, self.contact, self.features)
+            best = measure.best_rule(rules)
+            correct[k], feature = best["correct"][None], feature or best["feature"]
+        return Scores(correct, feature=feature)
