@@ -59,10 +59,10 @@ def main(argv: list[str] | None = None) -> int:
     import dataclasses
 
     from study.book import results
-    from study.runs import Runner, preset, stats
+    from study.learn.train import TrainConfig
     from study.report.reported import count, number
     from study.report.text import fmt
-    from study.learn.train import TrainConfig
+    from study.runs import Runner, preset, stats
     from study.simulate import synth
 
     source = results.load(a.results)["table1.z.mean"].source

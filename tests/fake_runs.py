@@ -17,12 +17,12 @@ import numpy as np
 import torch
 
 from study.core.cache import write_text_atomic
-from study.methods import rockets
-from study.runs import records
 from study.learn import train
 from study.learn.config import DIMS, TrainConfig
-from study.learn.model import Classifier
 from study.learn.metrics import failed_to_train, metrics, training_state
+from study.learn.model import Classifier
+from study.methods import rockets
+from study.runs import records
 from study.simulate.data import Dataset
 
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from fake_runs import cache_models, cache_records, cache_rocket
+
 from study.book import results
-from study.runs import Runner, paper, stats
 from study.chapters import baselines
-from study.report import verdicts
-from study.methods.calibration import OBSERVED_SEEDS
 from study.learn.config import TrainConfig
+from study.methods.calibration import OBSERVED_SEEDS
+from study.report import verdicts
+from study.runs import Runner, paper, stats
 from study.simulate import measure
 from study.simulate.observe import Observation
 

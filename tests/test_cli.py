@@ -3,11 +3,10 @@ with one line naming the path, exits 2 and leaves nothing behind; `--help` costs
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
-
-import json
 
 import pytest
 

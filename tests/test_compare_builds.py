@@ -8,8 +8,8 @@ import json
 from pathlib import Path
 
 from study.book import results
-from study.report import reported, verdicts
 from study.learn.metrics import Interval
+from study.report import reported, verdicts
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "compare_builds.py"
 

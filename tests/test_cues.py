@@ -9,18 +9,18 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-
 from fake_runs import cache_records
+
 from study.book import results
 from study.book.publish import glued
-from study.runs import Runner, paper, records
-from study.methods import calibration
 from study.chapters import cues
-from study.runs.runtable import Run, Runs
-from study.methods.tracker import Decomposition, TrackerError
-from study.methods.tracker_model import TrackerFit
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
+from study.methods import calibration
+from study.methods.tracker import Decomposition, TrackerError
+from study.methods.tracker_model import TrackerFit
+from study.runs import Runner, paper, records
+from study.runs.runtable import Run, Runs
 from study.simulate import data, observe
 from study.simulate.observe import TrackerNoise
 

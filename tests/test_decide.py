@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from study.book import results
-from study.core.errors import ConfigError
-from study.runs import Runner, paper
-from study.methods import calibration
 from study.chapters import decision, motion
+from study.core.errors import ConfigError
+from study.methods import calibration, operating
 from study.methods.tracker import TrackerError
+from study.runs import Runner, paper
 
 
 @pytest.fixture
@@ -25,10 +25,10 @@ def scores():
 def test_the_threshold_meets_the_target_miss_rate(scores):
     p, y = scores
     for target in (0.01, 0.05, 0.2):
-        t = decision.threshold_for_miss_rate(p, y, target)
+        t = operating.threshold_for_miss_rate(p, y, target)
         misses = np.mean(p[y == 1] < t)
         assert misses <= target and misses > target - 2 / 5000  # as high as the target allows
-    r = decision.rates(p, y, decision.threshold_for_miss_rate(p, y, 0.01))
+    r = operating.rates(p, y, operating.threshold_for_miss_rate(p, y, 0.01))
     assert r.miss.value <= 0.01 and r.miss.lo <= r.miss.value <= r.miss.hi
     assert 0 < r.false_alarm.value < 1  # the price of a low miss rate
 
@@ -37,26 +37,26 @@ def test_the_threshold_meets_the_target_miss_rate(scores):
 def test_a_target_outside_0_1_is_refused(scores, target):
     p, y = scores
     with pytest.raises(ConfigError, match="target miss rate"):
-        decision.threshold_for_miss_rate(p, y, target)
+        operating.threshold_for_miss_rate(p, y, target)
 
 
 def test_an_empty_set_or_one_without_heavy_objects_is_refused():
     with pytest.raises(ConfigError, match="empty"):
-        decision.threshold_for_miss_rate(np.array([]), np.array([]), 0.01)
+        operating.threshold_for_miss_rate(np.array([]), np.array([]), 0.01)
     with pytest.raises(ConfigError, match="no heavy"):
-        decision.threshold_for_miss_rate(np.array([0.2, 0.4]), np.array([0, 0]), 0.01)
+        operating.threshold_for_miss_rate(np.array([0.2, 0.4]), np.array([0, 0]), 0.01)
     with pytest.raises(ConfigError, match=r"\[0, 1\]"):
-        decision.rates(np.array([1.5]), np.array([1]), 0.5)
+        operating.rates(np.array([1.5]), np.array([1]), 0.5)
 
 
 def test_roc_and_precision_recall_of_perfect_and_random_scores():
     y = np.repeat([0, 1], 500)
-    fpr, tpr = decision.roc(np.where(y == 1, 0.9, 0.1), y)
-    assert decision.auc(fpr, tpr) == pytest.approx(1.0)
+    fpr, tpr = operating.roc(np.where(y == 1, 0.9, 0.1), y)
+    assert operating.auc(fpr, tpr) == pytest.approx(1.0)
     rng = np.random.default_rng(1)
-    fpr, tpr = decision.roc(rng.random(1000), y)
-    assert decision.auc(fpr, tpr) == pytest.approx(0.5, abs=0.05)
-    recall, precision = decision.precision_recall(rng.random(1000), y)
+    fpr, tpr = operating.roc(rng.random(1000), y)
+    assert operating.auc(fpr, tpr) == pytest.approx(0.5, abs=0.05)
+    recall, precision = operating.precision_recall(rng.random(1000), y)
     assert recall[-1] == 1.0 and precision[-1] == pytest.approx(0.5)
 
 
@@ -64,23 +64,23 @@ def test_calibration_error_and_temperature_scaling():
     rng = np.random.default_rng(2)
     true_p = rng.random(20000)
     y = (rng.random(20000) < true_p).astype(int)
-    assert decision.expected_calibration_error(true_p, y) < 0.02  # calibrated by construction
-    overconfident = decision.scaled(true_p, 1 / 3)  # logits three times too large
-    assert decision.expected_calibration_error(overconfident, y) > 0.1
-    t = decision.fit_temperature(overconfident, y)
+    assert operating.expected_calibration_error(true_p, y) < 0.02  # calibrated by construction
+    overconfident = operating.scaled(true_p, 1 / 3)  # logits three times too large
+    assert operating.expected_calibration_error(overconfident, y) > 0.1
+    t = operating.fit_temperature(overconfident, y)
     assert t == pytest.approx(3.0, rel=0.1)
-    assert decision.expected_calibration_error(decision.scaled(overconfident, t), y) < 0.02
+    assert operating.expected_calibration_error(operating.scaled(overconfident, t), y) < 0.02
     with pytest.raises(ConfigError, match="temperature"):
-        decision.scaled(true_p, 0.0)
+        operating.scaled(true_p, 0.0)
 
 
 def test_time_to_clear():
     p = np.array([[0.9, 0.5, 0.2, 0.1], [0.9, 0.9, 0.9, 0.9], [0.1, 0.9, 0.9, 0.9]])
     thr = np.array([0.3, 0.3, 0.3, 0.3])
-    assert decision.time_to_clear(p, thr).tolist() == [2, -1, 0]
+    assert operating.time_to_clear(p, thr).tolist() == [2, -1, 0]
     with pytest.raises(ConfigError, match="thresholds"):
-        decision.time_to_clear(p, thr[:2])
-    assert math.isfinite(decision.fit_temperature(np.array([0.2, 0.8]), np.array([0, 1])))
+        operating.time_to_clear(p, thr[:2])
+    assert math.isfinite(operating.fit_temperature(np.array([0.2, 0.8]), np.array([0, 1])))
 
 
 def test_clearing_thresholds_bound_the_cumulative_miss_rate():
@@ -89,51 +89,51 @@ def test_clearing_thresholds_bound_the_cumulative_miss_rate():
     y = np.repeat([0, 1], n // 2)
     drift = np.linspace(0, 2, T)[None, :] * np.where(y == 1, 1, -1)[:, None]  # evidence grows with time
     p = 1 / (1 + np.exp(-(drift + rng.standard_normal((n, T)))))
-    thr = decision.clearing_thresholds(p, y, 0.01)
-    ever = decision.time_to_clear(p[y == 1], thr) >= 0
+    thr = operating.clearing_thresholds(p, y, 0.01)
+    ever = operating.time_to_clear(p[y == 1], thr) >= 0
     assert ever.mean() <= 0.01  # a heavy object cleared at any frame is a miss
-    cleared = decision.time_to_clear(p[y == 0], thr)
+    cleared = operating.time_to_clear(p[y == 0], thr)
     assert (cleared >= 0).mean() > 0.5 and np.median(cleared[cleared >= 0]) > 0
-    per_frame = np.array([decision.threshold_for_miss_rate(p[:, t], y, 0.01) for t in range(T)])
-    assert (decision.time_to_clear(p[y == 1], per_frame) >= 0).mean() > 0.01  # per-frame 1 % is not enough
+    per_frame = np.array([operating.threshold_for_miss_rate(p[:, t], y, 0.01) for t in range(T)])
+    assert (operating.time_to_clear(p[y == 1], per_frame) >= 0).mean() > 0.01  # per-frame 1 % is not enough
 
 
 def test_the_clopper_pearson_bound_of_known_cases():
-    assert 0.0099 < decision.clopper_pearson_upper(0, 299) < 0.01 < decision.clopper_pearson_upper(0, 298) < 0.0101
-    assert decision.clopper_pearson_upper(0, 299) == pytest.approx(1 - 0.05 ** (1 / 299))  # (1 - p)^n = 0.05
-    assert decision.clopper_pearson_upper(1, 20) == pytest.approx(0.2161, abs=1e-4)
-    assert decision.clopper_pearson_upper(20, 20) == 1.0
-    assert decision.clopper_pearson_upper(1, 20, level=0.99) > decision.clopper_pearson_upper(1, 20)
+    assert 0.0099 < operating.clopper_pearson_upper(0, 299) < 0.01 < operating.clopper_pearson_upper(0, 298) < 0.0101
+    assert operating.clopper_pearson_upper(0, 299) == pytest.approx(1 - 0.05 ** (1 / 299))  # (1 - p)^n = 0.05
+    assert operating.clopper_pearson_upper(1, 20) == pytest.approx(0.2161, abs=1e-4)
+    assert operating.clopper_pearson_upper(20, 20) == 1.0
+    assert operating.clopper_pearson_upper(1, 20, level=0.99) > operating.clopper_pearson_upper(1, 20)
     with pytest.raises(ConfigError, match="k = 3 of n = 2"):
-        decision.clopper_pearson_upper(3, 2)
+        operating.clopper_pearson_upper(3, 2)
     with pytest.raises(ConfigError, match="confidence level"):
-        decision.clopper_pearson_upper(1, 20, level=1.0)
+        operating.clopper_pearson_upper(1, 20, level=1.0)
 
 
 def test_the_certified_threshold_refuses_a_small_set_and_handles_ties(scores):
     p, y = scores
     small = np.r_[np.zeros(50, int), np.ones(298, int)]
-    assert decision.certified_threshold(np.linspace(0, 1, len(small)), small, 0.01) is None  # 298 < 299 heavy
+    assert operating.certified_threshold(np.linspace(0, 1, len(small)), small, 0.01) is None  # 298 < 299 heavy
     frames = np.linspace(0, 1, len(small))[:, None].repeat(3, 1)
-    assert decision.certified_clearing_thresholds(frames, small, 0.01) is None
+    assert operating.certified_clearing_thresholds(frames, small, 0.01) is None
     enough = np.r_[np.zeros(50, int), np.ones(299, int)]
-    t = decision.certified_threshold(np.linspace(0.01, 1, len(enough)), enough, 0.01)
+    t = operating.certified_threshold(np.linspace(0.01, 1, len(enough)), enough, 0.01)
     assert t == pytest.approx(0.01 + 0.99 * 50 / 348)  # k = 0: the smallest heavy score, nothing below it
-    plain, certified = decision.threshold_for_miss_rate(p, y, 0.01), decision.certified_threshold(p, y, 0.01)
+    plain, certified = operating.threshold_for_miss_rate(p, y, 0.01), operating.certified_threshold(p, y, 0.01)
     assert certified < plain  # 5000 heavy: 50 misses allowed on the split, 38 certified
-    assert decision.clopper_pearson_upper(38, 5000) <= 0.01 < decision.clopper_pearson_upper(39, 5000)
+    assert operating.clopper_pearson_upper(38, 5000) <= 0.01 < operating.clopper_pearson_upper(39, 5000)
     assert np.sum(p[y == 1] < certified) == 38 < np.sum(p[y == 1] < np.nextafter(certified, 1))
     # ties: 400 heavy allow 12 certified misses at 5 %; 10 heavy at 0.1, 10 at 0.2, 380 at 0.9
     heavy = np.r_[np.full(10, 0.1), np.full(10, 0.2), np.full(380, 0.9)]
     yt = np.r_[np.zeros(5, int), np.ones(400, int)]
-    t = decision.certified_threshold(np.r_[np.full(5, 0.05), heavy], yt, 0.05)
+    t = operating.certified_threshold(np.r_[np.full(5, 0.05), heavy], yt, 0.05)
     assert t == 0.2 and np.sum(heavy < t) == 10  # any higher threshold would miss 20 > 12
     with pytest.raises(ConfigError, match="target miss rate"):
-        decision.certified_threshold(p, y, 0.0)
+        operating.certified_threshold(p, y, 0.0)
     with pytest.raises(ConfigError, match="no heavy"):
-        decision.certified_threshold(np.array([0.2, 0.4]), np.array([0, 0]), 0.01)
+        operating.certified_threshold(np.array([0.2, 0.4]), np.array([0, 0]), 0.01)
     with pytest.raises(ConfigError, match="confidence level"):
-        decision.certified_threshold(p, y, 0.01, level=0.0)
+        operating.certified_threshold(p, y, 0.01, level=0.0)
 
 
 def test_the_certified_threshold_holds_on_data_it_has_not_seen():
@@ -146,10 +146,10 @@ def test_the_certified_threshold_holds_on_data_it_has_not_seen():
     draws, n, target = 1000, 500, 0.05
     heavy, light = rng.beta(5, 2, (draws, n)), rng.beta(2, 5, (draws, 100))
     y = np.r_[np.zeros(100, int), np.ones(n, int)]
-    cert = np.array([decision.certified_threshold(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
-    plain = np.array([decision.threshold_for_miss_rate(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
+    cert = np.array([operating.certified_threshold(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
+    plain = np.array([operating.threshold_for_miss_rate(np.r_[light[i], heavy[i]], y, target) for i in range(draws)])
     held, held_plain = np.mean(stats.beta.cdf(cert, 5, 2) <= target), np.mean(stats.beta.cdf(plain, 5, 2) <= target)
-    k = decision._certified_misses(n, target, 0.95)  # 16 certified misses of 500
+    k = operating._certified_misses(n, target, 0.95)  # 16 certified misses of 500
     assert 1 - stats.binom.cdf(k, n, target) >= 0.95  # the exact coverage of the (k + 1)-th smallest score: 0.966
     assert held >= 0.95 and held_plain < 0.6, (held, held_plain)
 
@@ -177,39 +177,39 @@ def test_certified_clearing_thresholds_hold_on_data_they_have_not_seen(frames):
 
     held = []
     for _ in range(draws):
-        thr = decision.certified_clearing_thresholds(np.r_[rng.beta(2, 5, (100, T)), heavy(n)], y, target)
+        thr = operating.certified_clearing_thresholds(np.r_[rng.beta(2, 5, (100, T)), heavy(n)], y, target)
         if frames == "independent":
             true = 1 - np.prod(1 - stats.beta.cdf(thr, a_t, 2.0))
         elif frames == "monotone":  # cleared at frame t iff u < thr_t^(1 / c_t)
             true = np.max(thr ** (1 / c_t))
         else:
-            true = np.mean(decision.time_to_clear(heavy(20000), thr) >= 0)
+            true = np.mean(operating.time_to_clear(heavy(20000), thr) >= 0)
         held.append(true <= target)
     assert np.mean(held) >= 0.95, np.mean(held)
 
 
 def test_what_the_decision_chapter_reads_off_a_split(scores):
-    assert decision.heavy_needed(0.01) == 299 and decision.heavy_needed(0.05) == 59
+    assert operating.heavy_needed(0.01) == 299 and operating.heavy_needed(0.05) == 59
     p, y = scores
     half = np.arange(len(y)) % 2 == 0  # certification and test splits, both classes in each
-    op = decision.operating_point(p[half], y[half], p[~half], y[~half], 0.01)
-    assert op.certified == decision.certified_threshold(p[half], y[half], 0.01) < op.empirical
+    op = operating.operating_point(p[half], y[half], p[~half], y[~half], 0.01)
+    assert op.certified == operating.certified_threshold(p[half], y[half], 0.01) < op.empirical
     assert op.miss.value <= op.miss_empirical.value
     assert op.false_alarm.value >= op.false_alarm_empirical.value
     few = np.r_[np.zeros(10, int), np.ones(100, int)]
-    none = decision.operating_point(np.linspace(0, 1, 110), few, p, y, 0.01)
+    none = operating.operating_point(np.linspace(0, 1, 110), few, p, y, 0.01)
     assert none.certified is None and none.miss is None and none.miss_empirical is not None
     rng = np.random.default_rng(4)
     n, T = 2000, 10
     yy = np.repeat([0, 1], n // 2)
     drift = np.linspace(0, 2, T)[None, :] * np.where(yy == 1, 1, -1)[:, None]
     f_cert, f_test = (1 / (1 + np.exp(-(drift + rng.standard_normal((n, T))))) for _ in range(2))
-    c = decision.clearing(f_cert, yy, f_test, yy, 0.05)
+    c = operating.clearing(f_cert, yy, f_test, yy, 0.05)
     assert c.thresholds.shape == (T,) and c.cleared.shape == (n // 2,)
     assert c.share_cleared.value == c.cleared.mean() and len(c.times) == c.cleared.sum()
     assert (c.times >= 0).all() and c.miss.value < 0.1
-    assert decision.clearing(f_cert[:300], yy[:300] * 0 + 1, f_test, yy, 0.01) is not None
-    assert decision.clearing(f_cert[:200], np.ones(200, int), f_test, yy, 0.01) is None
+    assert operating.clearing(f_cert[:300], yy[:300] * 0 + 1, f_test, yy, 0.01) is not None
+    assert operating.clearing(f_cert[:200], np.ones(200, int), f_test, yy, 0.01) is None
 
 
 # ---------------------------------------------------------------------------------------------

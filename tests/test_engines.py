@@ -9,15 +9,15 @@ import re
 
 import numpy as np
 import pytest
-
 from fake_runs import cache_models, cache_records, cache_rocket
+
 from study.book import results
-from study.runs import Runner, paper
-from study.methods import ceiling
 from study.chapters import engine, motion
-from study.report import verdicts
-from study.methods.tracker import TrackerError
 from study.learn.metrics import Interval
+from study.methods import ceiling
+from study.methods.tracker import TrackerError
+from study.report import verdicts
+from study.runs import Runner, paper
 from study.simulate import measure, synth
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")

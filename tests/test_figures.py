@@ -19,10 +19,10 @@ def test_the_class_colours_are_colour_blind_safe_and_start_the_cycle() -> None:
 
 
 def test_accuracy_vs_length_draws_both_inputs_with_failed_runs_marked() -> None:
-    from study.runs.runtable import Run, Runs
-    from study.runs.stats import Summary
     from study.learn.config import TrainConfig
     from study.learn.metrics import Interval
+    from study.runs.runtable import Run, Runs
+    from study.runs.stats import Summary
 
     summary = [Summary({"dims": d, "length": L}, 2, 0.7, 0.0, 0.7, 0.7, 1, 0, 0, Interval(0.7, 0.65, 0.75, "x"))
                for d in ("xyz", "z") for L in (1.0, 2.0)]

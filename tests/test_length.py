@@ -12,14 +12,14 @@ import pytest
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
-
 from fake_runs import cache_records
+
 from study.book import figures, results
-from study.runs import PRESETS, Runner, paper, stats
 from study.chapters import length
-from study.runs.runtable import Run, Runs
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval
+from study.runs import PRESETS, Runner, paper, stats
+from study.runs.runtable import Run, Runs
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 

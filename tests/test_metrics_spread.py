@@ -6,7 +6,12 @@ import numpy as np
 import pytest
 
 from study.core.errors import ConfigError
-from study.learn.metrics import between_share, bootstrap_accuracy, hierarchical_bootstrap, t_interval
+from study.learn.metrics import (
+    between_share,
+    bootstrap_accuracy,
+    hierarchical_bootstrap,
+    t_interval,
+)
 
 
 def test_t_interval_against_a_hand_computation():

@@ -8,15 +8,15 @@ import math
 
 import numpy as np
 import pytest
-
 from fake_runs import cache_models, cache_records, cache_rocket
+
 from study.book import results
-from study.runs import Runner, paper, stats
 from study.chapters import motion
-from study.report.text import pct, pct_ci, seeds_ci
-from study.methods.tracker import TrackerError
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
+from study.methods.tracker import TrackerError
+from study.report.text import pct, pct_ci, seeds_ci
+from study.runs import Runner, paper, stats
 from study.simulate import synth
 from study.simulate.observe import Observation, TrackerNoise
 

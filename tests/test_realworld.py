@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 from study.book import results
-from study.core.errors import ConfigError, DataError
-from study.runs import paper
 from study.chapters import realworld
 from study.chapters.realworld import Recommendation
-from study.report.text import Table
+from study.core.errors import ConfigError, DataError
 from study.learn.metrics import Interval
+from study.report.text import Table
+from study.runs import paper
 from study.see import render
 from study.simulate import synth
 

@@ -3,18 +3,17 @@
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import pytest
 
-from dataclasses import dataclass
-from typing import Literal
-
 from study import cli
 from study.book import results
 from study.core.errors import ConfigError, DataError
-from study.report import reported, text, verdicts
 from study.learn.metrics import Interval, at_chance, bootstrap_accuracy, wilson
+from study.report import reported, text, verdicts
 
 
 def test_wilson_interval_of_a_known_binomial_case():

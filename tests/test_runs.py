@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 
 from study import runs
+from study.chapters import cues, length, realworld, table1
 from study.core import presets
 from study.core.errors import ConfigError
-from study.runs import cluster, paper, records, schedule, stats
-from study.chapters import cues, length, realworld, table1
-from study.report import text
-from study.runs.runner import Runner
-from study.runs.runtable import Run, Runs
 from study.learn import train
 from study.learn.metrics import Interval, bootstrap_accuracy
+from study.report import text
+from study.runs import cluster, paper, records, schedule, stats
+from study.runs.runner import Runner
+from study.runs.runtable import Run, Runs
 
 TINY = runs.Preset(
     name="tiny", length=0.5, lrs=(1e-2,), truncations=(5, 15), dropouts=(0.2,), batch_sizes=(8,),

@@ -8,9 +8,9 @@ import json
 import pytest
 import torch
 
-from study.runs import records, schedule
 from study.learn import native, stack
 from study.learn.config import TrainConfig
+from study.runs import records, schedule
 
 SMOKE = TrainConfig(length=1.0, max_epochs=4, patience=2, min_epochs=2, truncation=10)
 """A short training at the smoke data set's shape; every member below shares it but for seed, rate and dropout."""

@@ -11,9 +11,9 @@ import matplotlib.pyplot as plt
 import pytest
 
 from study.book import figures, summary
+from study.learn.metrics import Interval
 from study.report import verdicts
 from study.report.reported import Verdict, number
-from study.learn.metrics import Interval
 
 
 def _rows() -> tuple[summary.Row, ...]:

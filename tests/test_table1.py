@@ -6,12 +6,12 @@ import dataclasses
 
 import numpy as np
 import pytest
-
 from fake_runs import cache_models, cache_records
+
 from study.book import results
-from study.runs import Runner, paper
 from study.chapters import table1
 from study.report import verdicts
+from study.runs import Runner, paper
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 

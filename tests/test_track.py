@@ -6,10 +6,10 @@ import csv
 from pathlib import Path
 
 import cv2
+import model_toys
 import numpy as np
 import pytest
 
-import model_toys
 from study import cli
 from study.chapters import realworld
 from study.core.errors import ConfigError, TrackingError, VideoError

@@ -9,9 +9,9 @@ import pytest
 
 from study.methods import tracker, videos
 from study.see import render
-from study.simulate import synth
 from study.see.gaps import rest_diameter
 from study.see.trajectory import Trajectory
+from study.simulate import synth
 
 
 def _series(n_videos: int = 40, n: int = 300, bias=0.002, offset=0.003, rho=0.8, flight=0.01, contact=0.003,

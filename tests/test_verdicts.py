@@ -8,8 +8,8 @@ import json
 import pytest
 
 from study.core.errors import ConfigError
-from study.report import verdicts
 from study.learn.metrics import Interval
+from study.report import verdicts
 
 
 def test_a_paper_number_is_reproduced_inside_the_margin_and_differs_wholly_outside():

@@ -481,7 +481,9 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
                  stages: list, done: list, tmp: Path, scheduler: str, device: str, workers: int) -> None:
     """Execute the chapters of ``todo`` in rounds (see :func:`execute`), training each round's runs at once; the
     chapters that run last wait until every other chapter is done."""
-    from study.runs import schedule  # torch: only a build that executes a chapter loads it
+    from study.runs import (
+        schedule,  # torch: only a build that executes a chapter loads it
+    )
 
     rest = [t for t in todo if t[1] not in last]
     final = [t for t in todo if t[1] in last]

@@ -8,15 +8,17 @@ works under Agg (scripts, tests) and under the notebook's inline backend alike.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import matplotlib as mpl
 from matplotlib.figure import Figure
 
-from study.chapters.cues import Bin, Point, Sweep
 from study.runs import paper
 from study.runs.runtable import Runs
 from study.runs.stats import Summary
+
+if TYPE_CHECKING:
+    from study.chapters.cues import Bin, Point, Sweep
 
 # Okabe & Ito (2008), "Color Universal Design": distinguishable with every common colour deficiency.
 OKABE_ITO: dict[str, str] = {
@@ -351,7 +353,7 @@ def what_the_motion_allows(allows: Any) -> Figure:
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
-    from study.chapters.motion import SHOWN
+    from study.report.motion import SHOWN
 
     colour = {k: _CYCLE[i] for i, k in enumerate(SHOWN)}
     heights = [len(p.conditions) + 1.3 for p in allows.panels]

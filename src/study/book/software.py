@@ -13,9 +13,9 @@ import torch
 
 import study
 from study.core.cache import source_hash
+from study.learn import native
 from study.report.reported import Reported
 from study.report.text import Table
-from study.learn import native
 
 
 @dataclass(frozen=True)

@@ -15,12 +15,23 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from study.book import results
-from study.chapters import baselines, cues, decision, engine, length, motion, realworld, table1, data
-from study.runs import paper
-from study.report import verdicts
 from study.core.errors import StudyError
+from study.methods import camera, learners
+from study.report import (
+    baselines,
+    cues,
+    data,
+    decision,
+    engine,
+    length,
+    motion,
+    realworld,
+    table1,
+    verdicts,
+)
 from study.report.reported import Leaf, Number, Reported, Verdict
 from study.report.text import Bullets, Table, fmt, fmt_value, pct
+from study.runs import paper
 
 
 @dataclass(frozen=True)
@@ -235,7 +246,7 @@ class Findings:
     def of(cls, c: Chapters, rows: tuple[Row, ...]) -> Findings:
         m, airs = c.motion, ("air_on", "air_off")
         best = {a: m.best[a]["calibrated"].learner for a in airs}  # type: ignore[index]
-        camera = {a: Best(motion.NAMES[k], m.learners[k][a]["calibrated"]) for a, k in best.items()}  # type: ignore[index]
+        camera = {a: Best(learners.NAMES[k], m.learners[k][a]["calibrated"]) for a, k in best.items()}  # type: ignore[index]
         return cls({v: sum(r.verdict == v for r in rows) for v in verdicts.VERDICTS},
                    {d: c.table1.rows[d].paper_way for d in table1.ORDER},  # type: ignore[index]
                    {d: c.engine.table1[d].paper_way for d in table1.ORDER},  # type: ignore[index]
@@ -352,7 +363,7 @@ class Condition:
     label: str
     """The condition, in words."""
     accuracy: Mapping[str, Number]
-    """Learner (``study.chapters.motion.NAMES``) -> its test accuracy there."""
+    """Learner (``study.methods.learners.NAMES``) -> its test accuracy there."""
     best: str | None
     """The condition's best learner, None where the chapter names none."""
 
@@ -382,7 +393,7 @@ class Allows:
         for air, title, ceiling in (("air_on", "the study's throws, with air", m.ceiling.air_on),
                                     ("air_off", "the same throws without air", m.ceiling.air_off)):
             rows = []
-            for view in motion.VIEWS:
+            for view in camera.VIEWS:
                 best = m.best[air][view].learner  # type: ignore[index]
                 seen = "exact positions" if view == "exact" else f"{view} camera, {_mm(m.noise[view])} error"  # type: ignore[index]
                 acc = {k: m.learners[k][air][view] for k in (*shown, best)}  # type: ignore[index]
@@ -394,7 +405,7 @@ class Allows:
                     rows.append(Condition(f"Bullet, {'exact positions' if view == 'exact' else view + ' camera'}",
                                           acc, None))
             panels.append(Panel(title, ceiling, tuple(rows)))
-        return cls(tuple(panels), dict(motion.NAMES))
+        return cls(tuple(panels), dict(learners.NAMES))
 
 
 @dataclass(frozen=True)
@@ -521,9 +532,9 @@ class Summary:
         for air in ("air_on", "air_off"):
             for view, label in (("exact", "exact"), ("calibrated", "the calibrated tracker")):
                 best = m.best[air][view]  # type: ignore[index]
-                text = f"{motion.NAMES[best.learner]}: {fmt(m.learners[best.learner][air][view])}"  # type: ignore[index]
+                text = f"{learners.NAMES[best.learner]}: {fmt(m.learners[best.learner][air][view])}"  # type: ignore[index]
                 if best.tied:
-                    text += f" (tied with the {motion.NAMES[best.runner_up]}: {fmt(best.lead)})"
+                    text += f" (tied with the {learners.NAMES[best.runner_up]}: {fmt(best.lead)})"
                 rows.append({"cond": f"{air.replace('_', ' ')}, {label}",
                              "paper": fmt(m.learners["peephole_positions"][air][view]),  # type: ignore[index]
                              "best": text, "ceiling": fmt(getattr(m.ceiling, air))})

@@ -25,27 +25,24 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 import torch
 
-from study.report import verdicts
-from study.report.reported import Number, Reported, Verdict, named, number
-from study.runs.runner import Runner
-from study.report.text import Table, points, seeds_ci
 from study.learn import baseline, train
-from study.methods import calibration, learners
 from study.learn.config import Cell, Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.learn.rocket import MiniRocket
+from study.methods import calibration, learners
+from study.report import verdicts
+from study.report.baselines import Condition, Method, Numbers, Timing
+from study.report.reported import Number, Verdict, number
+from study.report.text import Table, points, seeds_ci
+from study.runs.runner import Runner
 from study.simulate import measure
 from study.simulate.observe import Observation
 
-Method = Literal["peephole", "gru", "minirocket", "physics", "rule"]
-"""The methods compared, by their name in the results file."""
-Condition = Literal["exact", "observed"]
-"""Exact positions, or positions as the calibrated tracker observes them (Z only)."""
 METHOD_NAMES: dict[Method, str] = {"peephole": "peephole LSTM (paper)", "gru": "GRU",
                                    "minirocket": "MiniRocket (sktime)", "physics": "physics baseline",
                                    "rule": "best one-feature rule"}
@@ -65,31 +62,6 @@ Correct = dict[tuple[Method, Dims, Condition], np.ndarray]
 
 # ---------------------------------------------------------------------------------------------
 # What the chapter reports
-
-
-@dataclass(frozen=True)
-class Timing(Reported):
-    """One method's cost on Z, one thread."""
-
-    fit_s: Number
-    """One training, seconds."""
-    infer_us: Number
-    """Inference per test trajectory, microseconds."""
-
-
-@dataclass(frozen=True)
-class Numbers(Reported):
-    """Every number the chapter *What a practitioner would try first* reports."""
-
-    CHAPTER = "baselines"
-    accuracy: dict[Method, dict[Dims, dict[Condition, Number]]] = named("")
-    """Each method's test accuracy (``baselines.minirocket.z.exact``)."""
-    time: dict[Method, Timing] = named("time")
-    """Each method's cost."""
-    peephole_minus_rule: dict[Dims, dict[Condition, Number]] = named("peephole_minus_rule")
-    """The paper's network minus the best one-feature rule, with the verdict on its claim that it does better."""
-    more_involved_required: Verdict = named("more_involved_required")
-    """That claim over every cell."""
 
 
 # ---------------------------------------------------------------------------------------------

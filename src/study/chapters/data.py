@@ -28,17 +28,17 @@ from typing import Literal
 import numpy as np
 
 from study import CLASSES
-from study.report import verdicts
-from study.report.reported import Number, Reported, Verdict, named, number
-from study.runs.stats import mean_difference
-from study.report.text import Table, pct, pct_ci
 from study.learn.metrics import bootstrap_accuracy
+from study.report import verdicts
+from study.report.data import Figure3, Numbers, RuleName
+from study.report.reported import Number, Verdict, number
+from study.report.text import Table, pct, pct_ci
+from study.runs.stats import mean_difference
 from study.see import render
 from study.simulate import checks, contact, measure, synth
 from study.simulate.data import Dataset, Split
 from study.simulate.synth import SynthConfig
 
-RuleName = Literal["bounces", "time_to_rest", "distance", "max_height_after_1s"]
 RULES: tuple[RuleName, ...] = ("bounces", "time_to_rest", "distance", "max_height_after_1s")
 """The one-number summaries a simple rule thresholds here (``measure.FEATURES``); the fall's acceleration, which
 reads the air's drag, is left out on purpose (the chapter on cues tries it)."""
@@ -89,30 +89,6 @@ UNITS: dict[str, str] = {"mass": "kg (log-uniform)", "restitution": "(uniform)",
 
 # ---------------------------------------------------------------------------------------------
 # What the chapter reports
-
-
-@dataclass(frozen=True)
-class Figure3(Reported):
-    """The paper's reading of its Figure 3, as statistics of the test throws."""
-
-    bounces: Number
-    """Light minus heavy, mean number of bounces (bootstrap over the throws), ordered against the paper's claim."""
-    time_to_rest: Number
-    """Light minus heavy, mean time to rest, seconds."""
-    verdict: Verdict = named("")
-    """Both claims together (``data.figure3``)."""
-
-
-@dataclass(frozen=True)
-class Numbers(Reported):
-    """Every number the chapter *The data* reports."""
-
-    CHAPTER = "data"
-    figure2: Verdict
-    """The paper's Figure 2, a figure without a number."""
-    figure3: Figure3
-    rule: dict[RuleName, Number]
-    """Test accuracy of the best threshold on each summary (bootstrap over the test throws)."""
 
 
 # ---------------------------------------------------------------------------------------------

@@ -24,33 +24,33 @@ from typing import Literal, get_args
 import numpy as np
 
 from study import CLASSES
-from study.methods import camera, ceiling, learners
-from study.methods import calibration
-from study.runs import paper, stats
-from study.report import verdicts
-from study.report.reported import Number, Reported, count, number
-from study.runs.runner import Runner
-from study.runs.runtable import Runs
-from study.report.text import Table, pct, pct_ci, points, seeds_ci
-from study.methods.tracker import TrackerError
 from study.learn.config import Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
+from study.methods import calibration, camera, ceiling, learners
+from study.methods.tracker import TrackerError
+from study.report import verdicts
+from study.report.engine import (
+    ClassName,
+    Feature,
+    Learner,
+    MassOnly,
+    Numbers,
+    Pair,
+    PairedNumbers,
+    Table1Row,
+    View,
+)
+from study.report.reported import Number, count, number
+from study.report.text import Table, pct, pct_ci, points, seeds_ci
+from study.runs import paper, stats
+from study.runs.runner import Runner
+from study.runs.runtable import Runs
 from study.simulate import bullet, measure, observe, synth
 from study.simulate.data import Dataset
 from study.simulate.synth import ENGINES, ClassPrior, Engine, SynthConfig
 
-Learner = Literal["peephole_positions", "peephole_velocity", "minirocket", "rule"]
-"""The learners of the cross-engine table (named as in ``study.methods.learners.NAMES``)."""
 Network = Literal["peephole_positions", "peephole_velocity"]
 """Its networks."""
-View = Literal["exact", "calibrated"]
-"""How the positions are seen (``camera.Column.name``)."""
-Pair = Literal["mujoco_to_mujoco", "mujoco_to_bullet", "bullet_to_mujoco", "bullet_to_bullet"]
-"""A training engine and a test engine."""
-Feature = Literal["bounces", "time_to_rest", "first_rebound", "distance"]
-"""What :func:`agreement` compares, throw by throw."""
-ClassName = Literal["light", "heavy"]
-"""``study.CLASSES``."""
 
 LEARNERS: tuple[Learner, ...] = get_args(Learner)
 NETWORKS: tuple[Network, ...] = get_args(Network)
@@ -412,67 +412,6 @@ def mass_test(runner: Runner, engine: Engine, learner: Learner, cfgs: Mapping[Ne
 
 # ---------------------------------------------------------------------------------------------
 # What the chapter reports
-
-
-@dataclass(frozen=True)
-class Table1Row(Reported):
-    """One row of Table 1 in one engine."""
-
-    paper_way: Number
-    """The run validation picks (one data set: the bootstrap of that run); in Bullet, against the paper's."""
-    mean: Number
-    """The mean over the seeds."""
-
-
-@dataclass(frozen=True)
-class MassOnly(Reported):
-    """The mass-only test in one engine."""
-
-    accuracy: Number
-    """The chapter's best learner trained and tested on two classes whose only difference is the mass."""
-    above_chance: Number
-    """That accuracy minus one half, in points."""
-
-
-@dataclass(frozen=True)
-class PairedNumbers(Reported):
-    """The paired check in one engine: the same throws as a light and as a heavy object."""
-
-    max_distance: Number
-    """Median over the throws of each throw's largest distance over the record, m."""
-    largest: Number
-    """The largest of those, m."""
-    first_second: Number
-    """Median over the throws of the largest distance in the first second, m."""
-    parted: Number
-    """Throws whose two trajectories part by more than a micrometre within the record."""
-    parting_time: Number | None
-    """Median over those throws of the time they part, s (absent when none does)."""
-
-
-@dataclass(frozen=True)
-class Numbers(Reported):
-    """Every number the chapter *Another engine* reports."""
-
-    CHAPTER = "engine"
-    agreement: dict[Feature, dict[ClassName, Number]]
-    """Median of Bullet minus MuJoCo per throw, by class."""
-    cross: dict[Learner, dict[View, dict[Pair, Number]]]
-    """Each learner trained in one engine and tested in another (``mujoco_to_bullet``)."""
-    ceiling: Number
-    """The exact ceiling of the priors (both engines: the same draws)."""
-    transfer: dict[Learner, dict[View, dict[Engine, Number]]]
-    """Trained in an engine: the other engine's accuracy minus its own."""
-    table1: dict[Dims, Table1Row]
-    """Table 1 in Bullet, the paper's engine."""
-    table1_mujoco_air_off: dict[Dims, Table1Row]
-    """Table 1 in MuJoCo on the same throws without air."""
-    mass_only: dict[Engine, MassOnly]
-    """Each engine's mass-only test (``engine.mass_only.bullet.accuracy``)."""
-    mass_only_ceiling: Number
-    """The exact ceiling of the mass-only priors (one half: the same restitution and friction)."""
-    paired: dict[Engine, PairedNumbers]
-    """Each engine's paired check (``engine.paired.bullet.max_distance``)."""
 
 
 def agreement_numbers(diff: Mapping[Feature, np.ndarray],

@@ -27,34 +27,48 @@ import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Literal, get_args
+from typing import get_args
 
 import numpy as np
 
-from study.methods import ceiling, learners
-from study.methods.camera import (AIR_OFF_PARAMETERS, AIR_ON_PARAMETERS, AIRS, FAR, NEAR, ROWS_1080, RULE_FEATURES,  # noqa: F401
-                                  SHORT, VIEWS, Air, Column, Observed, View, column_ceiling, columns,
-                                  trained_config)
-from study.methods import calibration
-from study.report.reported import Number, Reported, count, named, number
-from study.runs.runner import Runner
-from study.report.text import Table, pct, pct_ci, seeds_ci
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
+from study.methods import calibration, ceiling, learners
+from study.methods.camera import (  # noqa: F401
+    AIR_OFF_PARAMETERS,
+    AIR_ON_PARAMETERS,
+    AIRS,
+    FAR,
+    NEAR,
+    ROWS_1080,
+    RULE_FEATURES,
+    SHORT,
+    VIEWS,
+    Air,
+    Column,
+    Observed,
+    View,
+    column_ceiling,
+    columns,
+    trained_config,
+)
+from study.report.motion import (  # noqa: F401
+    LEARNERS,
+    SHOWN,
+    Best,
+    Ceiling,
+    Learner,
+    Network,
+    Numbers,
+    Trained,
+)
+from study.report.reported import Number, count, number
+from study.report.text import Table, pct, pct_ci, seeds_ci
+from study.runs.runner import Runner
 from study.simulate import observe
 from study.simulate.synth import SynthConfig
 
-Network = Literal["peephole_positions", "peephole_velocity", "gru_velocity"]
-"""The networks trained on each column's condition, each at its own configuration."""
-Trained = Literal[Network, "peephole_exact_trained"]
-"""Every network row: the three networks, and Table 1's network trained exact and tested observed."""
-Learner = Literal[Trained, "minirocket", "physics", "rule"]
-"""Every row of the table, the ceiling aside."""
-
 NETWORKS: tuple[Network, ...] = get_args(Network)
-LEARNERS: tuple[Learner, ...] = get_args(Learner)
-SHOWN: tuple[Learner, ...] = tuple(n for n in LEARNERS if n != "peephole_exact_trained")
-"""The learners the chapter's figure draws (the exact-trained row is the paper's network under another name)."""
 NAMES: dict[Learner, str] = learners.NAMES  # type: ignore[assignment]
 """Each learner in words."""
 # ---------------------------------------------------------------------------------------------
@@ -163,56 +177,6 @@ def best_of(entries: Sequence[Entry]) -> Lead:
 
 # ---------------------------------------------------------------------------------------------
 # What the chapter reports
-
-
-@dataclass(frozen=True)
-class Ceiling(Reported):
-    """The exact ceiling of the priors."""
-
-    air_off: Number
-    """Without air: the Bayes rule told each throw's restitution and friction."""
-    air_off_restitution: Number
-    """Without air, told the restitution alone."""
-    air_on: Number
-    """With air: told the mass too."""
-
-
-@dataclass(frozen=True)
-class Best(Reported):
-    """The best learner of one column: how far below the ceiling, and by how much ahead of the next."""
-
-    gap_to_ceiling: Number
-    """The ceiling minus the best learner's mean accuracy."""
-    lead: Number
-    """The best learner minus the next, paired; its source names ``best``, ``next`` and whether ``tied``."""
-
-    @property
-    def learner(self) -> Learner:
-        return self.lead.source["best"]
-
-    @property
-    def runner_up(self) -> Learner:
-        return self.lead.source["next"]
-
-    @property
-    def tied(self) -> bool:
-        return bool(self.lead.source["tied"])
-
-
-@dataclass(frozen=True)
-class Numbers(Reported):
-    """Every number the chapter *What the motion allows* reports."""
-
-    CHAPTER = "motion"
-    ceiling: Ceiling
-    noise: dict[Observed, Number]
-    """Each observed view's camera error, metres."""
-    learners: dict[Learner, dict[Air, dict[View, Number]]] = named("")
-    """Each learner's test accuracy in each column (``motion.peephole_positions.air_on.exact``)."""
-    failed_runs: Number
-    """Network runs of the chapter that failed to train (each run once)."""
-    best: dict[Air, dict[View, Best]]
-    """Each column's best learner."""
 
 
 def ceiling_numbers(prior: SynthConfig) -> Ceiling:

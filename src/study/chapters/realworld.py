@@ -39,9 +39,10 @@ import numpy as np
 from study import CLASSES
 from study.core.errors import ConfigError, StudyError
 from study.core.progress import Progress
-from study.runs import paper
-from study.methods import tracker
-from study.report import verdicts
+from study.learn import train
+from study.learn.config import Inputs, TrainConfig
+from study.learn.metrics import Interval, wilson
+from study.methods import calibration, tracker
 from study.methods.videos import (  # noqa: F401  (re-exported: the chapter's videos)
     REAL_CLIPS_DEFAULT,
     REAL_CLIPS_ENV,
@@ -54,16 +55,21 @@ from study.methods.videos import (  # noqa: F401  (re-exported: the chapter's vi
     render_set,
     throw,
 )
-from study.report.reported import Number, Reported, Verdict, named, number
+from study.report import verdicts
+from study.report.realworld import (
+    Candidate,
+    Class,
+    Classified,
+    ModelKey,
+    Numbers,
+    Training,
+)
+from study.report.reported import Number, Verdict, number
 from study.report.text import Table, pct, pct_ci
-from study.learn import train
-from study.learn.config import Inputs, TrainConfig
-from study.methods import calibration
+from study.runs import paper
 from study.runs.stats import scored
-from study.simulate import observe
-from study.learn.metrics import Interval, wilson
 from study.see import render, track, video
-from study.simulate import measure
+from study.simulate import measure, observe
 
 if TYPE_CHECKING:
     from study.runs.runner import Runner
@@ -240,12 +246,6 @@ def scale_error(tracks: Iterable[Tracked], true: float) -> float:
 # ---------------------------------------------------------------------------------------------
 # What the chapter reports
 
-Class = Literal["light", "heavy"]
-"""The study's classes (``study.CLASSES``)."""
-Training = Literal["exact", "randomised"]
-"""How a candidate was trained: on exact positions, or on random observations."""
-ModelKey = Literal["table1", "recommended"]
-"""The models the chapter classifies the videos with: Table 1's Z model, and the recommended one where it differs."""
 
 WHY_NOT_COMPARABLE: dict[str, str] = {
     "rendered": "rendered MuJoCo throws from the study's priors, not the paper's filmed golf ball and wooden cube",
@@ -258,41 +258,6 @@ FILM_FRAMES = 6
 """Frames of each video in Figure 1."""
 FILM_SECONDS = 2.0
 """Figure 1 shows each video's first seconds, this many."""
-
-
-@dataclass(frozen=True)
-class Candidate(Reported):
-    """One candidate model for a camera."""
-
-    val: Number
-    """Accuracy on seed 0's validation throws, observed as the tracker observes them."""
-
-
-@dataclass(frozen=True)
-class Classified(Reported):
-    """One model's labels of the videos, per true class, each with its Wilson interval and beside the paper's."""
-
-    rendered: dict[Class, Number]
-    """The rendered videos (a class with no video tracked is left out)."""
-    real: dict[Class, Number]
-    """The real clips (only the classes they hold)."""
-
-
-@dataclass(frozen=True)
-class Numbers(Reported):
-    """Every number and verdict the chapter *Real-world test* reports."""
-
-    CHAPTER = "realworld"
-    candidate: dict[Inputs, dict[Training, Candidate]]
-    """Each candidate, by what it reads and how it was trained."""
-    figure1: Verdict
-    """The paper's Figure 1: frames of a light and a heavy object."""
-    figure5: Verdict
-    """The paper's Figure 5: tracked heights of the real videos."""
-    figure6: Verdict
-    """The paper's Figure 6: frames of the real videos, tracked."""
-    models: dict[ModelKey, Classified] = named("")
-    """Each model's labels: ``realworld.table1.rendered.light`` and so on."""
 
 
 # ---------------------------------------------------------------------------------------------

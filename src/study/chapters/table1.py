@@ -25,22 +25,42 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
-from study.runs import paper, stats
-
+from study.learn import baseline, train
+from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
+from study.learn.inputs import rotated
+from study.learn.metrics import (
+    PLATEAU_LOSS,
+    Interval,
+    between_share,
+    bootstrap_accuracy,
+    bootstrap_difference,
+    hierarchical_bootstrap,
+    t_interval,
+)
 from study.report import verdicts
-from study.report.reported import Number, Reported, Verdict, count, named, number
+from study.report.reported import Number, Verdict, count, number
+from study.report.table1 import (
+    ORDER,
+    Ablation,
+    AblationCell,
+    GridNumbers,
+    Network,
+    Numbers,
+    ProtocolKey,
+    ProtocolRow,
+    Rotated,
+    Row,
+    ScheduleRow,
+    Speed,
+    Velocity,
+)
+from study.report.text import Table, pct, pct_ci, pct_pm, points, runs_note, seeds_ci
+from study.runs import paper, stats
 from study.runs.runner import Runner
 from study.runs.runtable import Fitted, Run, Runs
-from study.report.text import Table, pct, pct_ci, pct_pm, points, runs_note, seeds_ci
-from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
-from study.learn import baseline, train
-from study.learn.inputs import rotated
-from study.learn.metrics import (PLATEAU_LOSS, Interval, between_share, bootstrap_accuracy, bootstrap_difference,
-                                 hierarchical_bootstrap, t_interval)
 
 CELL_NAMES: dict[Cell, str] = {"peephole": "peephole LSTM (paper)", "no-peephole": "LSTM, peepholes fixed at 0",
                                "torch-lstm": "LSTM (torch.nn.LSTM)", "gru": "GRU"}
@@ -48,9 +68,6 @@ CELL_NAMES: dict[Cell, str] = {"peephole": "peephole LSTM (paper)", "no-peephole
 INPUT_NAMES: dict[Inputs, str] = {"positions": "positions (the paper's)", "velocity": "with velocity (beyond the paper)",
                                    "speed": "height, its velocity, horizontal speed (beyond the paper)"}
 """What the network reads, in words."""
-Network = Literal["positions", "velocity", "speed", "rotated"]
-"""Table 1's networks: the paper's on positions; fed velocity; fed what does not turn with the heading ('speed'); the
-paper's on positions, trained on throws turned about the vertical."""
 NETWORKS: tuple[Network, ...] = ("positions", "velocity", "speed", "rotated")
 NETWORK_NAMES: dict[Network, str] = {**INPUT_NAMES, "rotated": "positions, trained on turned throws (beyond the paper)"}
 """Each network in words."""
@@ -60,143 +77,12 @@ ROTATE = 180.0
 """The augmentation's range, degrees: any heading, as the throws are launched."""
 TURN_SEED = 28
 """Seed of the angles the test throws are turned by (:func:`heading_flips`)."""
-ProtocolKey = Literal["first", "forget_bias", "min_epochs", "clipping", "plateau"]
 PROTOCOL_KEYS: tuple[ProtocolKey, ...] = ("first", "forget_bias", "min_epochs", "clipping", "plateau")
 """The results file's name of each protocol of ``paper.PROTOCOLS``, in order."""
-ORDER: tuple[Dims, ...] = ("xyz", "z")
-"""Table 1's rows, in the paper's order."""
 
 
 # ---------------------------------------------------------------------------------------------
 # What the chapter reports
-
-
-@dataclass(frozen=True)
-class Row(Reported):
-    """One row of Table 1: one input (X, Y, Z or Z) of one network (positions or velocity)."""
-
-    paper_way: Number
-    """The run validation picks on each data set, mean over data sets (hierarchical bootstrap); with the paper's
-    number and its verdict on the positions row."""
-    mean: Number
-    """Mean test accuracy of the first data set's seeds (bootstrap over test throws and seeds)."""
-    mean_t: Number
-    """The same mean with a t-interval over its seeds."""
-    across_data: Number
-    """Mean over every data set and the grid's seeds (hierarchical bootstrap)."""
-    between_share: Number
-    """Share of a run's variance that lies between data sets."""
-    std: Number
-    """Sample standard deviation of the first data set's seeds."""
-    failed: Number
-    """Runs that failed to train, every data set."""
-
-
-@dataclass(frozen=True)
-class ScheduleRow(Reported):
-    """The velocity network at its grid point with one learning-rate schedule, on Z, the grid's seeds, validation."""
-
-    val_mean: Number
-    """Mean validation accuracy at the kept epoch over the seeds."""
-    swing: Number
-    """How far the validation loss moves from one epoch to the next: the mean absolute change over the second half
-    of a run's epochs, nats, mean over the seeds."""
-
-
-@dataclass(frozen=True)
-class Velocity(Reported):
-    """Table 1 for the paper's network fed its velocity (beyond the paper)."""
-
-    rows: dict[Dims, Row] = named("")
-    xyz_minus_z: Number = named("xyz_minus_z")
-    """X, Y, Z minus Z, mean over seeds (paired bootstrap)."""
-    schedule: dict[Schedule, ScheduleRow] = named("schedule")
-    """Each learning-rate schedule at the velocity network's point; the rows use the one validation prefers."""
-
-
-@dataclass(frozen=True)
-class Speed(Reported):
-    """The same network fed the height, its velocity and the horizontal speed (``inputs='speed'``): nothing that
-    turns with the throw's heading. Its X, Y, Z row only: on Z alone its channels are the velocity network's."""
-
-    rows: dict[Dims, Row] = named("")
-    xyz_minus_z: Number = named("xyz_minus_z")
-    """Its X, Y, Z minus the velocity network's Z, mean over seeds (paired bootstrap): the paper's claim when the
-    heading cannot be memorised."""
-
-
-@dataclass(frozen=True)
-class Rotated(Reported):
-    """The paper's network on X, Y, Z positions, its training throws turned about the vertical every epoch."""
-
-    mean: Number
-    """Mean test accuracy of Table 1's seeds, data set 1."""
-    gain: Number
-    """Minus the paper's network on X, Y, Z without the rotations, the same seeds (paired bootstrap)."""
-    xyz_minus_z: Number
-    """Minus the paper's network on Z, the same seeds (paired bootstrap)."""
-    failed: Number
-    """Runs that failed to train."""
-
-
-@dataclass(frozen=True)
-class ProtocolRow(Reported):
-    """One training protocol on one input, on validation data."""
-
-    val_mean: Number
-    """Mean validation accuracy over the protocol seeds."""
-    stalled: Number
-    """Seeds that stalled (failed to train)."""
-
-
-@dataclass(frozen=True)
-class AblationCell(Reported):
-    """One cell of the ablation, on Z, with Table 1's seeds."""
-
-    mean: Number
-    """Mean test accuracy."""
-
-
-@dataclass(frozen=True)
-class Ablation(Reported):
-    """Do the peepholes matter?"""
-
-    cells: dict[Cell, AblationCell] = named("")
-    minus: dict[Cell, Number] = named("peephole_minus_{key}")
-    """The peephole LSTM minus each other cell (paired bootstrap)."""
-
-
-@dataclass(frozen=True)
-class GridNumbers(Reported):
-    """The grid search."""
-
-    failed_runs: Number
-    """Grid runs that failed to train, every cell."""
-
-
-@dataclass(frozen=True)
-class Numbers(Reported):
-    """Every number the chapter *Table 1* reports."""
-
-    CHAPTER = "table1"
-    grid: GridNumbers
-    protocol: dict[ProtocolKey, dict[Dims, ProtocolRow]]
-    rows: dict[Dims, Row] = named("")
-    velocity: Velocity = named("velocity")
-    verdict: Verdict = named("verdict")
-    """Table 1 over both inputs: the paper's best against the run validation picks."""
-    xyz_minus_z: Number = named("xyz_minus_z")
-    """X, Y, Z minus Z (positions), mean over seeds, with the verdict on the paper's claim that X, Y, Z is better."""
-    speed: Speed = named("speed")
-    rotated: Rotated = named("rotated")
-    flips: dict[Network, Number] = named("flips")
-    """Share of the test throws whose answer changes when the throw is turned about the vertical by a random angle,
-    each X, Y, Z network, Table 1's seeds, data set 1."""
-    ablation: Ablation = named("ablation")
-    baseline: dict[Dims, Number] = named("baseline")
-    """The physics baseline's test accuracy."""
-    lstm_minus_baseline: dict[Dims, Number] = named("lstm_minus_baseline")
-    """The paper's network (mean of seeds) minus the physics baseline."""
 
 
 # ---------------------------------------------------------------------------------------------

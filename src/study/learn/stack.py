@@ -44,7 +44,12 @@ import torch.nn.functional as F
 
 from study.learn import gru, model, native, peephole
 from study.learn.config import DIMS, TrainConfig, select_inputs
-from study.learn.inputs import deterministic, epoch_inputs, normalisation, split_train_val
+from study.learn.inputs import (
+    deterministic,
+    epoch_inputs,
+    normalisation,
+    split_train_val,
+)
 from study.learn.model import Classifier
 from study.learn.trained import THREADS, TrainedModel, num_threads
 from study.simulate.data import Dataset

@@ -29,10 +29,10 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from study.core.errors import DataError
-from study.report.reported import Number, Reported, count, number
+from study.learn.metrics import Interval
 from study.methods import tracker
 from study.methods.videos import Video
-from study.learn.metrics import Interval
+from study.report.reported import Number, Reported, count, number
 from study.see import render
 from study.see.config import TrackConfig
 from study.simulate import observe

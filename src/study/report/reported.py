@@ -35,9 +35,9 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar, TypeVar
 
 from study.core.errors import ConfigError, StudyError
+from study.learn.metrics import Interval
 from study.report import verdicts
 from study.report.verdicts import Decision, Margin
-from study.learn.metrics import Interval
 
 UNITS_WITHOUT_INTERVAL = ("count", "setting")
 """Units whose numbers are exact by nature."""

@@ -41,7 +41,9 @@ def default_workers() -> int:
 def local_cluster(workers: int) -> Any:
     """A Dask ``LocalCluster`` of ``workers`` single-threaded worker processes, listening on the loopback address
     only (a Dask scheduler runs whatever code reaches it), without a dashboard."""
-    from distributed import LocalCluster  # Dask is imported only where a cluster is asked for
+    from distributed import (
+        LocalCluster,  # Dask is imported only where a cluster is asked for
+    )
 
     return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                         dashboard_address=None)

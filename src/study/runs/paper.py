@@ -24,9 +24,9 @@ from typing import Any, get_args
 
 import numpy as np
 
+from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
 from study.runs.presets import Preset
 from study.runs.runtable import Runs
-from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
 
 TABLE1: dict[Dims, float] = {"xyz": 0.81, "z": 0.78}
 """The paper's Table 1, its "best accuracy" with X, Y, Z and with Z alone: the paper's own numbers, quoted."""

@@ -30,10 +30,10 @@ import torch
 
 from study.core.errors import StudyError
 from study.core.progress import Progress
-from study.runs.cluster import PLAN_ENV, default_workers, local_cluster
-from study.runs.records import cached, record_path, run_key, train_stack
 from study.learn import native, stack
 from study.learn.train import TrainConfig
+from study.runs.cluster import PLAN_ENV, default_workers, local_cluster
+from study.runs.records import cached, record_path, run_key, train_stack
 from study.simulate import data
 from study.simulate.data import Dataset
 

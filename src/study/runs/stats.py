@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 
 from study.core.errors import ConfigError
-from study.runs.runtable import Run, Runs
 from study.learn.metrics import Interval, bootstrap_accuracy, hierarchical_bootstrap
+from study.runs.runtable import Run, Runs
 
 
 @dataclass(frozen=True)

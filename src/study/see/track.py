@@ -19,12 +19,12 @@ from pathlib import Path
 import numpy as np
 
 from study.core.errors import TrajectoryError, check_range
+from study.see.camera import Camera
 from study.see.config import PRESETS, TrackConfig, parse_hsv
 from study.see.detect import detect_all
-from study.see.camera import Camera
 from study.see.gaps import fill_gaps, resample, set_camera, set_scale
-from study.see.smooth import smooth
 from study.see.overlay import write_overlay
+from study.see.smooth import smooth
 from study.see.trackfile import read_csv, write_csv
 from study.see.trajectory import STATUS, Trajectory
 

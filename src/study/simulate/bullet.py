@@ -64,9 +64,9 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from study import CLASSES
 from study.core.errors import ConfigError
 from study.core.progress import Progress
-from study import CLASSES
 from study.simulate.config import GRAVITY, SynthConfig, staggered_qvel
 from study.simulate.scene import Shape
 from study.simulate.trace import Trace

@@ -12,8 +12,12 @@ import mujoco
 import numpy as np
 
 from study.simulate import measure
-from study.simulate.contact import damping_for_restitution, drop_test, measured_restitution
 from study.simulate.config import GRAVITY, SynthConfig, staggered_qvel
+from study.simulate.contact import (
+    damping_for_restitution,
+    drop_test,
+    measured_restitution,
+)
 from study.simulate.mujoco_sim import build_model, initial_data, simulate
 from study.simulate.trace import Trace
 

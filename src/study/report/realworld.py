@@ -1,0 +1,56 @@
+"""What the real-world chapter reports, typed: the names its numbers are glued and stored under (``realworld.…``), read back
+by the summary without running the chapter (``study.chapters.realworld`` computes them)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from study.learn.config import Inputs
+from study.report.reported import Number, Reported, Verdict, named
+
+Class = Literal["light", "heavy"]
+"""The study's classes (``study.CLASSES``)."""
+
+
+Training = Literal["exact", "randomised"]
+"""How a candidate was trained: on exact positions, or on random observations."""
+
+
+ModelKey = Literal["table1", "recommended"]
+"""The models the chapter classifies the videos with: Table 1's Z model, and the recommended one where it differs."""
+
+
+@dataclass(frozen=True)
+class Candidate(Reported):
+    """One candidate model for a camera."""
+
+    val: Number
+    """Accuracy on seed 0's validation throws, observed as the tracker observes them."""
+
+
+@dataclass(frozen=True)
+class Classified(Reported):
+    """One model's labels of the videos, per true class, each with its Wilson interval and beside the paper's."""
+
+    rendered: dict[Class, Number]
+    """The rendered videos (a class with no video tracked is left out)."""
+    real: dict[Class, Number]
+    """The real clips (only the classes they hold)."""
+
+
+@dataclass(frozen=True)
+class Numbers(Reported):
+    """Every number and verdict the chapter *Real-world test* reports."""
+
+    CHAPTER = "realworld"
+    candidate: dict[Inputs, dict[Training, Candidate]]
+    """Each candidate, by what it reads and how it was trained."""
+    figure1: Verdict
+    """The paper's Figure 1: frames of a light and a heavy object."""
+    figure5: Verdict
+    """The paper's Figure 5: tracked heights of the real videos."""
+    figure6: Verdict
+    """The paper's Figure 6: frames of the real videos, tracked."""
+    models: dict[ModelKey, Classified] = named("")
+    """Each model's labels: ``realworld.table1.rendered.light`` and so on."""
