@@ -507,3 +507,40 @@ def test_a_library_banner_is_dropped_from_the_printed_output_and_nothing_else() 
     outputs = nbtidy.drop_banners(nb).cells[0].outputs
     assert [o.output_type for o in outputs] == ["stream", "display_data"], "the banner-only output removed"
     assert outputs[0]["text"] == "a\nb\n"
+
+
+NAMED_PENDING = HEADER + """
+# An exception that only shares the name
+
+```{code-cell} ipython3
+:tags: [parameters]
+
+preset = "paper"
+```
+
+```{code-cell} ipython3
+import os
+
+from study.core import ticket
+
+seen = ticket.current()
+assert os.path.exists(os.environ[ticket.ENV]) and seen.results and seen.plan and seen.progress and seen.pending
+assert not [k for k in os.environ if k.startswith("STUDY_") and k != ticket.ENV], "one variable: the ticket"
+
+
+class Pending(Exception):
+    pass
+
+
+raise Pending("listed nothing")
+```
+"""
+
+
+def test_a_chapter_stops_for_runs_only_when_its_ticket_lists_them(tmp_path: Path) -> None:
+    """The builder tells a chapter everything through its ticket (one environment variable), and reads from the
+    ticket whether a chapter that stopped asked for runs: an exception that merely shares the name ``Pending``, with
+    no runs listed, is a failure of the chapter, not a wait."""
+    root = write_book(tmp_path, {"named": NAMED_PENDING}, "format: jb-book\nroot: book/named\n")
+    with pytest.raises(ChapterError, match="Pending: listed nothing"):
+        book.build(root, "smoke", force=False, only=None, html=False)

@@ -11,6 +11,7 @@ import pytest
 
 from study import cli
 from study.book import results
+from study.core import ticket
 from study.core.errors import ConfigError, DataError
 from study.learn.metrics import Interval, at_chance, bootstrap_accuracy, wilson
 from study.report import reported, text, verdicts
@@ -94,7 +95,7 @@ def test_a_chapter_tree_names_its_numbers_and_reads_back_from_the_results_file(t
     assert names == ["realworld.rendered.light", "realworld.gaps.gap", "realworld.figure5", "realworld.real.heavy",
                      "realworld.cell_a"]
     part = tmp_path / "part.json"
-    monkeypatch.setenv(results.ENV, str(part))
+    monkeypatch.setenv(ticket.ENV, str(ticket.Ticket(results=str(part)).write(tmp_path / "ticket.json")))
     assert results.write_part("realworld", ch.entries()) == part
     out = results.merge([part, tmp_path / "absent.json"], tmp_path / "build.json", "smoke")
     body = json.loads(out.read_text())
@@ -163,7 +164,7 @@ def test_results_file_round_trip_and_compare(tmp_path, capsys):
 
 
 def test_results_outside_the_builder_write_nothing(monkeypatch):
-    monkeypatch.delenv(results.ENV, raising=False)
+    monkeypatch.delenv(ticket.ENV, raising=False)
     assert results.write_part("x", [("x.n", reported.count(3, "n"))]) is None
 
 

@@ -8,6 +8,7 @@ import json
 import pytest
 import torch
 
+from study.core import ticket
 from study.learn import native, stack
 from study.learn.config import TrainConfig
 from study.runs import records, schedule
@@ -81,7 +82,7 @@ def test_a_planned_build_stops_a_chapter_at_runs_not_trained_yet(smoke_dataset, 
     jobs = [(ds, SMOKE, True), (ds, dataclasses.replace(SMOKE, seed=1), False)]
     schedule.ask(jobs, data)  # not planning: nothing happens
     pending = tmp_path / "pending.jsonl"
-    monkeypatch.setenv(schedule.PENDING_ENV, str(pending))
+    monkeypatch.setenv(ticket.ENV, str(ticket.Ticket(pending=str(pending)).write(tmp_path / "ticket.json")))
     with pytest.raises(schedule.Pending, match="2 runs are not trained yet"):
         schedule.ask(jobs, data)
     with pytest.raises(schedule.Pending):

@@ -34,13 +34,11 @@ from tqdm import tqdm
 
 import study
 from study.book import nbtidy, results
-from study.core import presets
+from study.core import presets, ticket
 from study.core.cache import canonical_json, key, source_hash, write_text_atomic
 from study.core.errors import ChapterError, ConfigError, check_writable
-from study.core.progress import ENV as PROGRESS_ENV
 from study.core.progress import Follower
 from study.runs import cluster
-from study.runs.cluster import DEVICE_ENV, PLAN_ENV
 
 RUNTIME = ("scheduler",)
 """Parameters that say where a chapter's work runs, not what it computes: injected into the chapters that
@@ -217,11 +215,10 @@ def inputs_fingerprint(root: Path, parameters: dict[str, Any]) -> dict[str, Any]
 
 
 @contextlib.contextmanager
-def _kernel_environment(progress: Path | None = None, results_part: Path | None = None,
-                        plan_part: Path | None = None) -> Iterator[None]:
-    """Environment the kernel inherits: headless MuJoCo, fixed hash seed, the inline matplotlib backend, the
-    progress file (:mod:`study.core.progress`), the chapter's results part (:mod:`study.book.results`) and plan
-    part (:data:`PLAN_ENV`), and this very ``study``."""
+def _kernel_environment(ticket_file: Path | None = None) -> Iterator[None]:
+    """Environment the kernel inherits: headless MuJoCo, fixed hash seed, the inline matplotlib backend, this very
+    ``study``, and the chapter's ticket (``study.core.ticket``: where its progress, numbers and plan go, its
+    device, where it lists runs not trained yet), the one thing the builder tells a chapter."""
     saved = dict(os.environ)
     os.environ.setdefault("MUJOCO_GL", "egl")
     os.environ["PYTHONHASHSEED"] = "0"
@@ -231,12 +228,8 @@ def _kernel_environment(progress: Path | None = None, results_part: Path | None 
     src = str(Path(study.__file__).resolve().parent.parent)
     path = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     os.environ["PYTHONPATH"] = os.pathsep.join([src, *[p for p in path if p != src]])
-    if progress is not None:
-        os.environ[PROGRESS_ENV] = str(progress)
-    if results_part is not None:
-        os.environ[results.ENV] = str(results_part)
-    if plan_part is not None:
-        os.environ[PLAN_ENV] = str(plan_part)
+    if ticket_file is not None:
+        os.environ[ticket.ENV] = str(ticket_file)
     try:
         yield
     finally:
@@ -290,11 +283,15 @@ def _failure_message(ch: Chapter, err: Any, nb: Any, root: Path) -> str:
     )
 
 
-def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], root: Path) -> None:
-    """Run ``source_nb`` (the chapter ``nb`` as .ipynb) with papermill into its executed copy, atomically.
+def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], root: Path, pending: Path | None = None,
+             device: str = "") -> None:
+    """Run ``source_nb`` (the chapter ``nb`` as .ipynb) with papermill into its executed copy, atomically, with a
+    ticket that gives it its files, its ``device`` and, in a planned build, ``pending``: where it lists the runs it
+    needs that are not trained yet.
 
-    Raises :class:`ChapterError` if a cell fails or the kernel dies; the partial copy goes to
-    ``_build/failed/`` and any older executed copy of the chapter is removed.
+    Raises :class:`_Pending` if the chapter stopped after listing runs there (its ticket says so), and
+    :class:`ChapterError` if a cell fails or the kernel dies; the partial copy goes to ``_build/failed/`` and any
+    older executed copy of the chapter is removed.
     """
     import nbformat
     import papermill
@@ -304,11 +301,16 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
     running = root / RUNNING / f"{ch.entry}.ipynb"
     running.parent.mkdir(parents=True, exist_ok=True)
     follow = running.with_suffix(".progress")
+    if pending is not None:
+        pending.unlink(missing_ok=True)  # what this execution asks for, nothing older
+    chapter_ticket = ticket.Ticket(progress=str(follow), results=str(ch.results_part), plan=str(ch.plan_part),
+                                   pending=str(pending or ""), device=device)
+    ticket_file = chapter_ticket.write(running.with_suffix(".ticket.json"))
     ch.results_part.unlink(missing_ok=True)  # written afresh by this run, or not at all
     ch.plan_part.unlink(missing_ok=True)
     ch.plan_part.parent.mkdir(parents=True, exist_ok=True)
     try:
-        with _kernel_environment(follow, ch.results_part, ch.plan_part), Follower(follow, ch.stem):
+        with _kernel_environment(ticket_file), Follower(follow, ch.stem):
             papermill.execute_notebook(
                 str(source_nb),
                 str(running),
@@ -322,7 +324,7 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
                 extra_arguments=["--IPKernelApp.log_level=ERROR"],
             )
     except PapermillExecutionError as e:
-        if e.ename == "Pending":  # it asked for runs not trained yet: the build trains them, then runs it again
+        if chapter_ticket.asked():  # it listed runs not trained yet: the build trains them, then runs it again
             running.unlink(missing_ok=True)
             raise _Pending(ch.stem) from None
         _keep_failed(ch, running)
@@ -335,6 +337,7 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
         raise
     finally:
         follow.unlink(missing_ok=True)
+        ticket_file.unlink(missing_ok=True)
     executed = nbformat.read(running, as_version=4)
     as_text = nbtidy.figures_as_text(executed)
     if as_text:
@@ -351,7 +354,7 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
 
 
 class _Pending(Exception):
-    """A chapter stopped at runs not trained yet (``study.runs.schedule.Pending``)."""
+    """A chapter stopped at runs not trained yet, which it listed in its ticket's ``pending`` file."""
 
 
 def _keep_failed(ch: Chapter, running: Path) -> None:
@@ -493,15 +496,13 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
             results.merge([c.results_part for c in chs], root / results.FILE, preset)
         waiting = list(group)
         while waiting:
-            pending_file = tmp / f"pending-{len(stages)}.jsonl"
             stopped = []
             for n, ch, probe, nb, params, info in waiting:
                 where = f"[{n}/{len(chs)}] {ch.stem}"
                 tqdm.write(f"{where}: executing" + (f" (stage {len(stages) + 1})" if stages else ""), file=sys.stderr)
                 t0 = time.perf_counter()
                 try:
-                    with _environment({schedule.PENDING_ENV: str(pending_file), DEVICE_ENV: device}):
-                        _execute(ch, probe, nb, params, root)
+                    _execute(ch, probe, nb, params, root, pending=_pending_file(tmp, ch, stages), device=device)
                 except _Pending:
                     seconds = time.perf_counter() - t0
                     entry = timings.setdefault(ch.stem, {"seconds": 0.0, "cached": False})
@@ -520,7 +521,10 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
             waiting = stopped
             if not waiting:
                 break
-            jobs = schedule.pending(pending_file)
+            asked_files = [_pending_file(tmp, t[1], stages) for t in waiting]
+            stage_file = tmp / f"pending-{len(stages)}.jsonl"  # every waiting chapter's, in order, each run once
+            stage_file.write_text("".join(f.read_text() for f in asked_files if f.is_file()))
+            jobs = schedule.pending(stage_file)
             asked = {schedule.run_key(ds, c, t, device) for ds, c, t in jobs}
             if not jobs or asked <= asked_before:
                 raise ChapterError(
@@ -537,19 +541,9 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
                            "seconds": round(time.perf_counter() - t0, 3)})
 
 
-@contextlib.contextmanager
-def _environment(values: dict[str, str]) -> Iterator[None]:
-    """``os.environ`` with ``values`` set, restored after."""
-    saved = {k: os.environ.get(k) for k in values}
-    os.environ.update(values)
-    try:
-        yield
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+def _pending_file(tmp: Path, ch: Chapter, stages: list) -> Path:
+    """Where ``ch`` lists the runs it needs that are not trained yet, in the current stage of the plan."""
+    return tmp / f"pending-{len(stages)}-{ch.stem}.jsonl"
 
 
 def plan_totals(root: Path) -> dict[str, float]:

@@ -2,7 +2,8 @@
 every verdict with the inputs it was decided from.
 
 Each chapter publishes its typed result (``study.book.publish``); when the book builder runs the chapter it
-sets :data:`ENV` to a file of its own (its *part*), and the chapter's numbers are written there
+names a file of its own in the chapter's ticket (its *part*, ``study.core.ticket``), and the chapter's numbers are
+written there
 (:func:`write_part`). The builder merges the parts of the book's chapters into one file,
 ``_build/results.json`` (:func:`merge`), which the summary page reads back into the chapters' own types
 (``study.report.reported.Reported.read``) and ``study results --compare OTHER`` compares with another
@@ -24,13 +25,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from study.core import ticket
 from study.core.cache import write_text_atomic
 from study.core.errors import ConfigError, DataError, check_file
 from study.report import verdicts
@@ -46,8 +47,6 @@ RENAMED: tuple[tuple[str, str], ...] = (
 """Names that changed with the second format, as (pattern, replacement) regular expressions: a file of the first
 format is read under today's names (its names, and the names its sources cite), so two builds still pair up. The
 motion table's peephole-LSTM learners were called ``lstm_*``, which read as ``torch.nn.LSTM``."""
-ENV = "STUDY_RESULTS_PART"
-"""Environment variable naming the file a chapter writes its numbers to (set by ``study book``)."""
 FILE = Path("_build") / "results.json"
 """Where the builder writes the merged results, relative to the book's root."""
 
@@ -138,8 +137,9 @@ def dumps(leaves: Iterable[tuple[str, Leaf]], **header: Any) -> str:
 
 
 def write_part(chapter: str, leaves: Iterable[tuple[str, Leaf]]) -> Path | None:
-    """Write a chapter's numbers to ``$STUDY_RESULTS_PART`` if the builder set it; returns its path."""
-    part = os.environ.get(ENV)
+    """Write a chapter's numbers to the results file its ticket names (``study.core.ticket``), if the builder
+    gave it one; returns its path."""
+    part = ticket.current().results
     if not part:
         return None
     path = Path(part)

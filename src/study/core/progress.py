@@ -2,7 +2,8 @@
 progress file when the book builder asks for one.
 
 A chapter runs in a papermill kernel whose output goes into the notebook, not to the terminal. The
-builder (``study.book``) therefore sets :data:`ENV` to a file for each chapter and follows it; the
+builder (``study.book``) therefore names a file for each chapter in its ticket (``study.core.ticket``) and
+follows it; the
 package's long loops (simulation, training runs, renders) report each step with :class:`Progress`,
 which writes one JSON line per update there: ``{"stage", "done", "total", "note"}``, and the
 builder shows them with a :class:`Follower`.
@@ -20,18 +21,18 @@ from typing import TextIO
 
 from tqdm import tqdm
 
-ENV = "STUDY_PROGRESS_FILE"
-"""Environment variable naming the progress file; unset: nothing is written."""
+from study.core import ticket
+
 
 
 class Progress:
     """``with Progress("grid (Z)", total=16, note="3 cached") as p: ... p.update()`` -- a tqdm bar (if
-    ``show``) and, where :data:`ENV` names a file, one JSON line per update appended to it."""
+    ``show``) and, where the chapter's ticket names a progress file, one JSON line per update appended to it."""
 
     def __init__(self, stage: str, total: int, *, show: bool = True, note: str = "", unit: str = "it") -> None:
         self.stage, self.total, self.note, self.done = stage, int(total), note, 0
         self.bar = tqdm(total=total, desc=stage, unit=unit, disable=not show, leave=False)
-        self.path = os.environ.get(ENV) or None
+        self.path = ticket.current().progress or None
         self.id = f"{os.getpid()}.{id(self)}"  # two stages of the same name are two bars
         self._emit()
 

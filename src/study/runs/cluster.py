@@ -12,15 +12,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-PLAN_ENV = "STUDY_PLAN_PART"
-"""Environment variable naming the file where a chapter's runs are listed (set by ``study book``; written by
-``study.runs.schedule.Plan``)."""
-
-
-DEVICE_ENV = "STUDY_DEVICE"
-"""Environment variable naming the torch device a chapter's runs train on (set by ``study book --device``)."""
-
-
 def device(name: str = "auto") -> str:
     """The torch device ``name`` names: ``"auto"`` is ``"cuda"`` where a GPU is at hand, else ``"cpu"``."""
     if name != "auto":

@@ -18,16 +18,15 @@ is that chapter's function taking the runner (``study.chapters``); what looks th
 from __future__ import annotations
 
 import dataclasses
-import os
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
+from study.core import ticket
 from study.learn import train
 from study.learn.config import Cell, Dims, Inputs, TrainConfig
 from study.runs import paper, records, schedule
-from study.runs.cluster import DEVICE_ENV
 from study.runs.presets import Preset, preset
 from study.runs.runtable import Run, Runs
 from study.simulate import synth
@@ -65,11 +64,12 @@ class Runner:
     def open(cls, preset_name: str, data_seed: int = 0, data_dir: str | Path = "data", *, workers: int = 0,
              scheduler: str = "", progress: bool = False, render_seed: int = 1000, device: str | None = None) -> Runner:
         """The runner of preset ``preset_name`` on its dataset of ``data_seed`` (simulated once, then cached); its
-        runs train on ``device`` (None: ``$STUDY_DEVICE``, which ``study book --device`` sets, else the CPU)."""
+        runs train on ``device`` (None: the device ``study book --device`` names in the chapter's ticket, else the
+        CPU)."""
         folder = Path(data_dir).resolve()
         ds = synth.dataset(preset_name, seed=data_seed, data_dir=folder, progress=progress)
         return cls(ds, preset(preset_name), folder, workers, progress, scheduler, render_seed,
-                   device or os.environ.get(DEVICE_ENV) or "cpu")
+                   device or ticket.current().device or "cpu")
 
     def on(self, dataset: Dataset) -> Runner:
         """The same runner on another dataset (the same throws without air, other shapes, ...); it shares this

@@ -28,11 +28,12 @@ from typing import Any
 
 import torch
 
+from study.core import ticket
 from study.core.errors import StudyError
 from study.core.progress import Progress
 from study.learn import native, stack
 from study.learn.train import TrainConfig
-from study.runs.cluster import PLAN_ENV, default_workers, local_cluster
+from study.runs.cluster import default_workers, local_cluster
 from study.runs.records import cached, record_path, run_key, train_stack
 from study.simulate import data
 from study.simulate.data import Dataset
@@ -185,7 +186,7 @@ class Plan:
     """The runs a runner was asked for: their models (one per dataset and config, whether scored on the test
     split or not) and the records that hold their training times.
 
-    Where :data:`PLAN_ENV` names a file (``study book`` sets one per chapter), each run is also appended to it
+    Where the chapter's ticket names a plan file (``study book`` gives one per chapter), each run is also appended to it
     as a JSON line, so the builder can count the distinct models of the whole book and sum their CPU time.
     """
 
@@ -196,7 +197,7 @@ class Plan:
 
     @classmethod
     def from_env(cls) -> Plan:
-        return cls(os.environ.get(PLAN_ENV) or None)
+        return cls(ticket.current().plan or None)
 
     def add(self, dataset: Dataset, cfg: TrainConfig, data_dir: str | Path, test: bool, device: str = "cpu") -> None:
         """Record that the run of ``cfg`` on ``dataset`` is part of this plan."""
@@ -218,19 +219,15 @@ class Plan:
 # ---------------------------------------------------------------------------------------------
 # One plan per build: chapters ask, the builder trains
 
-PENDING_ENV = "STUDY_PENDING"
-"""Environment variable naming the file where a chapter executed by ``study book`` writes the runs it asked for that
-are not trained yet, before it stops (:class:`Pending`); unset, a chapter trains what it needs itself."""
-
-
 class Pending(StudyError):
     """A chapter asked for runs that are not trained yet, in a build that trains every chapter's runs together: it
-    stops here, and the builder trains them with every other chapter's before executing it again."""
+    stops here, and the builder (which reads the runs from the chapter's ticket, not this exception) trains them
+    with every other chapter's before executing it again."""
 
 
 def planning() -> Path | None:
-    """The file of runs still to train when a build plans its runs (:data:`PENDING_ENV`), else None."""
-    path = os.environ.get(PENDING_ENV)
+    """The file of runs still to train when a build plans its runs (the ticket's ``pending``), else None."""
+    path = ticket.current().pending
     return Path(path) if path else None
 
 
