@@ -9,7 +9,8 @@ import torch
 from study.core.errors import ConfigError, TrajectoryError
 from study.learn import native
 from study.learn.config import INPUTS
-from study.learn.model import CELLS, Classifier, PeepholeLSTM, peephole_reference
+from study.learn import peephole
+from study.learn.model import CELLS, Classifier, PeepholeLSTM
 from study.learn.stream import Streamer
 
 
@@ -28,6 +29,16 @@ def backend(request, monkeypatch):
 def _layer(D: int = 3, H: int = 5, seed: int = 0) -> PeepholeLSTM:
     torch.manual_seed(seed)
     return PeepholeLSTM(D, H).double()
+
+
+def peephole_reference(layer, x, state=None):
+    """``layer`` (a ``PeepholeLSTM``) run by the cell's one plain definition, ``study.learn.peephole.reference``
+    (K stacked layers, time-major) with one member: ``x`` (B, T, D) -> (B, T, H) and the final (h, c)."""
+    h0, c0 = layer.init_state(x.shape[0], x) if state is None else state
+    weights = (layer.weight_ih, layer.weight_hh, layer.bias, layer.w_ci, layer.w_cf, layer.w_co)
+    hs, h, c = peephole.reference(x.transpose(0, 1).unsqueeze(0), h0.unsqueeze(0), c0.unsqueeze(0),
+                                  *(w.unsqueeze(0) for w in weights))
+    return hs[0].transpose(0, 1), (h[0], c[0])
 
 
 def _grads(fn, layer, x, state):

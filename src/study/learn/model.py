@@ -151,37 +151,6 @@ class PeepholeLSTM(nn.Module):
         return hs, (h, c)
 
 
-def peephole_reference(
-    layer: PeepholeLSTM, x: torch.Tensor, state: tuple[torch.Tensor, torch.Tensor] | None = None
-) -> tuple[torch.Tensor, tuple[torch.Tensor, torch.Tensor]]:
-    """The layer's definition, written as plainly as possible: one sequence, one step, one gate at a time (the
-    equations of the module's docstring, line by line). ``x`` (B, T, D) -> hidden states (B, T, H) and the final
-    (h, c). Slow: the layer computes the same with ``study.learn.peephole``'s loops, and the tests hold the two
-    equal."""
-    H = layer.hidden_size
-    W_x = layer.weight_ih.split(H)  # W_xi, W_xf, W_xg, W_xo, each (H, D)
-    W_h = layer.weight_hh.split(H)  # each (H, H)
-    b = layer.bias.split(H)  # each (H,)
-    outs, hs_last, cs_last = [], [], []
-    for n in range(x.shape[0]):
-        h = x.new_zeros(H) if state is None else state[0][n]
-        c = x.new_zeros(H) if state is None else state[1][n]
-        seq = []
-        for t in range(x.shape[1]):
-            xt = x[n, t]
-            i = torch.sigmoid(W_x[0] @ xt + W_h[0] @ h + layer.w_ci * c + b[0])
-            f = torch.sigmoid(W_x[1] @ xt + W_h[1] @ h + layer.w_cf * c + b[1])
-            g = torch.tanh(W_x[2] @ xt + W_h[2] @ h + b[2])
-            c = f * c + i * g
-            o = torch.sigmoid(W_x[3] @ xt + W_h[3] @ h + layer.w_co * c + b[3])
-            h = o * torch.tanh(c)
-            seq.append(h)
-        outs.append(torch.stack(seq))
-        hs_last.append(h)
-        cs_last.append(c)
-    return torch.stack(outs), (torch.stack(hs_last), torch.stack(cs_last))
-
-
 class PeepholeStack(nn.Module):
     """``layers`` peephole LSTM layers, each feeding the next; state is a list of per-layer (h, c)."""
 

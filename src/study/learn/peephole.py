@@ -6,7 +6,7 @@ building an autograd graph; its backward walks the steps once in reverse. On the
 ones of ``peephole.cpp`` (:mod:`study.learn.native`: one BLAS call and one fused elementwise pass per step), else
 :func:`recurrence` and :func:`backward_loop` in PyTorch operations (few kernels per step, preallocated buffers).
 The weight gradients are single matrix products over all time steps. The tests check both paths against the
-step-by-step definition, ``study.learn.model.peephole_reference``, and ``torch.autograd.gradcheck``.
+plain definition, :func:`reference`, and ``torch.autograd.gradcheck``.
 
 Layout: time-major ``(T, B, .)``; gates in the order i, f, g, o (``nn.LSTM``'s).
 """
@@ -17,6 +17,7 @@ import torch
 import torch.nn.functional as F
 
 from study.learn import native
+from study.learn.batched import baddbmm, bmm
 
 
 def recurrence(
@@ -159,7 +160,7 @@ class PeepholeFunction(torch.autograd.Function):
     reverse. On CPU both loops are the compiled ones of ``peephole.cpp`` (:mod:`study.learn.native`: one BLAS
     call and one fused elementwise pass per step), else :func:`recurrence` and :func:`backward_loop`
     in PyTorch operations. The weight gradients are then single matrix products over all time steps.
-    Both paths are checked against :func:`peephole_reference` and ``torch.autograd.gradcheck`` in the tests.
+    Both paths are checked against :func:`reference` and ``torch.autograd.gradcheck`` in the tests.
     """
 
     @staticmethod
@@ -197,3 +198,104 @@ class PeepholeFunction(torch.autograd.Function):
         d_w_ih = d_w[:, :D].contiguous() if need[3] else None
         d_w_hh = d_w[:, D:].contiguous() if need[4] else None
         return dx, dh, dc, d_w_ih, d_w_hh, d_bias if need[5] else None, d_w_ci, d_w_cf, d_w_co
+
+
+# ---------------------------------------------------------------------------------------------
+# K layers at once, one per member of a stack (``study.learn.stack``): (K, T, B, .)
+
+
+def reference(x: torch.Tensor, h0: torch.Tensor, c0: torch.Tensor, weight_ih: torch.Tensor,
+                       weight_hh: torch.Tensor, bias: torch.Tensor, w_ci: torch.Tensor, w_cf: torch.Tensor,
+                       w_co: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """K peephole LSTM layers as plain PyTorch operations, one batched product per time step for all members
+    (autograd differentiates them): the stacked PyTorch path, on any device. Shapes as :class:`StackedPeephole`; one layer alone is K = 1. The definition the compiled loops are
+    tested against."""
+    K, T, B, C = x.shape
+    xw = baddbmm(bias.unsqueeze(1), x.reshape(K, T * B, C), weight_ih.transpose(1, 2)).view(K, T, B, -1)
+    w_hh_t = weight_hh.transpose(1, 2)
+    ci, cf, co = (w.unsqueeze(1) for w in (w_ci, w_cf, w_co))  # (K, 1, H)
+    h, c, hs = h0, c0, []
+    for t in range(T):
+        a_i, a_f, a_g, a_o = baddbmm(xw[:, t], h, w_hh_t).chunk(4, 2)  # each (K, B, H)
+        i = torch.sigmoid(a_i + ci * c)
+        f = torch.sigmoid(a_f + cf * c)
+        c = f * c + i * torch.tanh(a_g)
+        h = torch.sigmoid(a_o + co * c) * torch.tanh(c)
+        hs.append(h)
+    return torch.stack(hs, 1), h, c
+
+
+class StackedPeephole(torch.autograd.Function):
+    """K peephole LSTM layers (or LSTMs without peepholes), one per member: ``x`` (K, T, B, C) time-major,
+    ``h0``, ``c0`` (K, B, H); weights ``weight_ih`` (K, 4H, C), ``weight_hh`` (K, 4H, H), ``bias`` (K, 4H),
+    peepholes ``w_ci``, ``w_cf``, ``w_co`` (K, H) -> hidden states (K, T, B, H), last h and c (K, B, H).
+
+    The compiled loop of ``peephole.cpp``, member by member, each writing into its slice of the stacked buffers
+    (the trainer hands it finite parameters only; a member whose incoming gradient is not finite goes back
+    through the PyTorch loop of :func:`backward_loop`, which propagates it as PyTorch does)."""
+
+    @staticmethod
+    def forward(ctx, x, h0, c0, weight_ih, weight_hh, bias, w_ci, w_cf, w_co):  # type: ignore[override]
+        lib = native.active()
+        K, T, B, C = x.shape
+        H = weight_hh.shape[2]
+        gates = baddbmm(bias.unsqueeze(1), x.reshape(K, T * B, C), weight_ih.transpose(1, 2)).view(K, T, B, 4 * H)
+        cs, hs = gates.new_empty(K, T + 1, B, H), gates.new_empty(K, T + 1, B, H)
+        tcs = gates.new_empty(K, T, B, H)
+        cs[:, 0], hs[:, 0] = c0, h0
+        run = lib.forward[gates.dtype]
+        for k in range(K):
+            w = [t.detach().contiguous() for t in (weight_hh[k].t(), w_ci[k], w_cf[k], w_co[k])]
+            run(T, B, H, native.ptr(gates[k]), *map(native.ptr, w), native.ptr(cs[k]), native.ptr(hs[k]),
+                native.ptr(tcs[k]), lib.blas[gates.dtype])
+        ctx.lib = lib
+        ctx.save_for_backward(x, weight_ih, weight_hh, w_ci, w_cf, w_co, gates, cs, hs, tcs)
+        return hs[:, 1:], hs[:, -1].clone(), cs[:, -1].clone()
+
+    @staticmethod
+    def backward(ctx, d_out, d_h, d_c):  # type: ignore[override]
+        x, weight_ih, weight_hh, w_ci, w_cf, w_co, gates, cs, hs, tcs = ctx.saved_tensors
+        lib = ctx.lib
+        K, T, B, G = gates.shape
+        H = G // 4
+        d_gates = torch.empty_like(gates)  # (K, T, B, 4H)
+        dh0, dc0 = gates.new_empty(K, B, H), gates.new_empty(K, B, H)
+        small = gates.new_empty(K, 7 * H)  # peepholes (3H) and bias (4H), summed over time and batch
+        run = lib.backward[gates.dtype]
+        for k in range(K):
+            dout_k = None if d_out is None else d_out[k]
+            dh_k = None if d_h is None else d_h[k]
+            dc_k = None if d_c is None else d_c[k]
+            if not native.all_finite(dout_k, dh_k, dc_k):
+                dg, dh, dc = backward_loop(None if dout_k is None else dout_k.transpose(0, 1), dh_k, dc_k,
+                                           gates[k], cs[k], hs[k], tcs[k], weight_hh[k], w_ci[k], w_cf[k], w_co[k])
+                d_gates[k], dh0[k], dc0[k] = dg, dh, dc
+                small[k] = torch.cat(small_grads(dg, cs[k]))
+                continue
+            dout = native.own(dout_k, gates[k], (T, B, H))  # time-major; the loop writes into it
+            dh0[k] = native.own(dh_k, gates[k], (B, H))
+            dc0[k] = native.own(dc_k, gates[k], (B, H))
+            w = [t.detach().contiguous() for t in (weight_hh[k], w_ci[k], w_cf[k], w_co[k])]
+            run(T, B, H, native.ptr(gates[k]), native.ptr(cs[k]), native.ptr(tcs[k]), *map(native.ptr, w),
+                native.ptr(dout), native.ptr(dh0[k]), native.ptr(dc0[k]), native.ptr(d_gates[k]), native.ptr(small[k]),
+                lib.blas[gates.dtype])
+        flat = d_gates.view(K, T * B, G)
+        dx = bmm(flat, weight_ih).view(K, T, B, -1)  # (K, T, B, C)
+        C = x.shape[3]
+        xh = torch.cat((x.reshape(K, T * B, C), hs[:, :-1].reshape(K, T * B, H)), dim=2)  # (K, T B, C + H)
+        d_w = bmm(xh.transpose(1, 2), flat).transpose(1, 2)  # (K, 4H, C + H)
+        d_ci, d_cf, d_co, d_b = small.split((H, H, H, 4 * H), dim=1)
+        return (dx, dh0, dc0, d_w[:, :, :C].contiguous(), d_w[:, :, C:].contiguous(), d_b, d_ci, d_cf, d_co)
+
+
+def _compiled(*tensors: torch.Tensor) -> bool:
+    return (tensors[0].device.type == "cpu" and tensors[0].dtype in (torch.float32, torch.float64)
+            and native.active() is not None)
+
+
+def stacked_layer(x, h0, c0, *weights):
+    """One stacked peephole layer: the compiled loop on the CPU where there is one (the trainer hands it finite
+    parameters only: a member whose parameters stop being finite has diverged and left), else the PyTorch loop."""
+    if _compiled(x):
+        return StackedPeephole.apply(x, h0, c0, *weights)
+    return reference(x, h0, c0, *weights)

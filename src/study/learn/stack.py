@@ -43,6 +43,7 @@ import torch
 import torch.nn.functional as F
 
 from study.learn import gru, model, native, peephole
+from study.learn.batched import baddbmm
 from study.learn.config import DIMS, TrainConfig, select_inputs
 from study.learn.inputs import (
     deterministic,
@@ -80,220 +81,6 @@ class Shape:
     """Trajectories in the training part: the same steps per epoch, the same last batch."""
     n_val: int
     """Trajectories in the validation part."""
-
-
-# ---------------------------------------------------------------------------------------------
-# Products member by member (CPU) or batched (elsewhere)
-
-
-def bmm(a: torch.Tensor, b: torch.Tensor, out: torch.Tensor | None = None) -> torch.Tensor:
-    """``a`` (K, n, m) @ ``b`` (K, m, p) -> (K, n, p): member by member on the CPU (each the product a lone run
-    makes, written into its slice of ``out``), one batched product elsewhere."""
-    if a.device.type != "cpu":
-        return torch.bmm(a, b, out=out)
-    out = a.new_empty(a.shape[0], a.shape[1], b.shape[2]) if out is None else out
-    for k in range(a.shape[0]):
-        torch.mm(a[k], b[k], out=out[k])
-    return out
-
-
-def baddbmm(c: torch.Tensor, a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-    """``c`` (K, 1 or n, p) + ``a`` (K, n, m) @ ``b`` (K, m, p), as :func:`bmm` (differentiable: autograd may
-    track its inputs; the layers' own functions write in place instead)."""
-    if a.device.type != "cpu":
-        return torch.baddbmm(c, a, b)
-    if torch.is_grad_enabled() and any(t.requires_grad for t in (a, b, c)):
-        return torch.stack([torch.addmm(z, x, y) for z, x, y in zip(c.unbind(0), a.unbind(0), b.unbind(0))])
-    out = a.new_empty(a.shape[0], a.shape[1], b.shape[2])
-    for k in range(a.shape[0]):
-        torch.addmm(c[k], a[k], b[k], out=out[k])
-    return out
-
-
-# ---------------------------------------------------------------------------------------------
-# The recurrent layers, stacked
-
-
-class StackedPeephole(torch.autograd.Function):
-    """K peephole LSTM layers (or LSTMs without peepholes), one per member: ``x`` (K, T, B, C) time-major,
-    ``h0``, ``c0`` (K, B, H); weights ``weight_ih`` (K, 4H, C), ``weight_hh`` (K, 4H, H), ``bias`` (K, 4H),
-    peepholes ``w_ci``, ``w_cf``, ``w_co`` (K, H) -> hidden states (K, T, B, H), last h and c (K, B, H).
-
-    The compiled loop of ``peephole.cpp``, member by member, each writing into its slice of the stacked buffers
-    (the trainer hands it finite parameters only; a member whose incoming gradient is not finite goes back
-    through the PyTorch loop of ``study.learn.model``, which propagates it as PyTorch does)."""
-
-    @staticmethod
-    def forward(ctx, x, h0, c0, weight_ih, weight_hh, bias, w_ci, w_cf, w_co):  # type: ignore[override]
-        lib = native.active()
-        K, T, B, C = x.shape
-        H = weight_hh.shape[2]
-        gates = baddbmm(bias.unsqueeze(1), x.reshape(K, T * B, C), weight_ih.transpose(1, 2)).view(K, T, B, 4 * H)
-        cs, hs = gates.new_empty(K, T + 1, B, H), gates.new_empty(K, T + 1, B, H)
-        tcs = gates.new_empty(K, T, B, H)
-        cs[:, 0], hs[:, 0] = c0, h0
-        run = lib.forward[gates.dtype]
-        for k in range(K):
-            w = [t.detach().contiguous() for t in (weight_hh[k].t(), w_ci[k], w_cf[k], w_co[k])]
-            run(T, B, H, native.ptr(gates[k]), *map(native.ptr, w), native.ptr(cs[k]), native.ptr(hs[k]),
-                native.ptr(tcs[k]), lib.blas[gates.dtype])
-        ctx.lib = lib
-        ctx.save_for_backward(x, weight_ih, weight_hh, w_ci, w_cf, w_co, gates, cs, hs, tcs)
-        return hs[:, 1:], hs[:, -1].clone(), cs[:, -1].clone()
-
-    @staticmethod
-    def backward(ctx, d_out, d_h, d_c):  # type: ignore[override]
-        x, weight_ih, weight_hh, w_ci, w_cf, w_co, gates, cs, hs, tcs = ctx.saved_tensors
-        lib = ctx.lib
-        K, T, B, G = gates.shape
-        H = G // 4
-        d_gates = torch.empty_like(gates)  # (K, T, B, 4H)
-        dh0, dc0 = gates.new_empty(K, B, H), gates.new_empty(K, B, H)
-        small = gates.new_empty(K, 7 * H)  # peepholes (3H) and bias (4H), summed over time and batch
-        run = lib.backward[gates.dtype]
-        for k in range(K):
-            dout_k = None if d_out is None else d_out[k]
-            dh_k = None if d_h is None else d_h[k]
-            dc_k = None if d_c is None else d_c[k]
-            if not native.all_finite(dout_k, dh_k, dc_k):
-                dg, dh, dc = peephole.backward_loop(None if dout_k is None else dout_k.transpose(0, 1), dh_k, dc_k,
-                                                  gates[k], cs[k], hs[k], tcs[k], weight_hh[k], w_ci[k], w_cf[k], w_co[k])
-                d_gates[k], dh0[k], dc0[k] = dg, dh, dc
-                small[k] = torch.cat(peephole.small_grads(dg, cs[k]))
-                continue
-            dout = native.own(dout_k, gates[k], (T, B, H))  # time-major; the loop writes into it
-            dh0[k] = native.own(dh_k, gates[k], (B, H))
-            dc0[k] = native.own(dc_k, gates[k], (B, H))
-            w = [t.detach().contiguous() for t in (weight_hh[k], w_ci[k], w_cf[k], w_co[k])]
-            run(T, B, H, native.ptr(gates[k]), native.ptr(cs[k]), native.ptr(tcs[k]), *map(native.ptr, w),
-                native.ptr(dout), native.ptr(dh0[k]), native.ptr(dc0[k]), native.ptr(d_gates[k]), native.ptr(small[k]),
-                lib.blas[gates.dtype])
-        flat = d_gates.view(K, T * B, G)
-        dx = bmm(flat, weight_ih).view(K, T, B, -1)  # (K, T, B, C)
-        C = x.shape[3]
-        xh = torch.cat((x.reshape(K, T * B, C), hs[:, :-1].reshape(K, T * B, H)), dim=2)  # (K, T B, C + H)
-        d_w = bmm(xh.transpose(1, 2), flat).transpose(1, 2)  # (K, 4H, C + H)
-        d_ci, d_cf, d_co, d_b = small.split((H, H, H, 4 * H), dim=1)
-        return (dx, dh0, dc0, d_w[:, :, :C].contiguous(), d_w[:, :, C:].contiguous(), d_b, d_ci, d_cf, d_co)
-
-
-class StackedGRU(torch.autograd.Function):
-    """K GRU layers (``nn.GRU``'s equations and parameters), one per member: ``x`` (K, T, B, C) time-major,
-    ``h0`` (K, B, H), ``weight_ih`` (K, 3H, C), ``weight_hh`` (K, 3H, H), ``bias_ih``, ``bias_hh`` (K, 3H) ->
-    hidden states (K, T, B, H) and the last (K, B, H). The compiled loop of ``gru.cpp`` member by member (the
-    trainer hands it finite parameters only); a member whose incoming gradient is not finite goes back through
-    ``study.learn.gru``'s PyTorch reference, which propagates it as PyTorch does."""
-
-    @staticmethod
-    def forward(ctx, x, h0, weight_ih, weight_hh, bias_ih, bias_hh):  # type: ignore[override]
-        lib = native.active()
-        K, T, B, C = x.shape
-        H = weight_hh.shape[2]
-        bias = torch.cat((bias_ih[:, : 2 * H] + bias_hh[:, : 2 * H], bias_ih[:, 2 * H:]), dim=1)  # (K, 3H)
-        gates = baddbmm(bias.unsqueeze(1), x.reshape(K, T * B, C), weight_ih.transpose(1, 2))
-        gates = gates.view(K, T, B, 3 * H).contiguous()
-        hs = gates.new_empty(K, T + 1, B, H)
-        hs[:, 0] = h0
-        hn = gates.new_empty(K, T, B, H)
-        scratch = gates.new_empty(B, 3 * H)
-        for k in range(K):
-            w = [t.detach().contiguous() for t in (weight_hh[k].t(), bias_hh[k, 2 * H:])]
-            lib.gru_forward[gates.dtype](T, B, H, native.ptr(gates[k]), *map(native.ptr, w), native.ptr(hs[k]),
-                                         native.ptr(hn[k]), native.ptr(scratch), lib.blas[gates.dtype])
-        ctx.lib = lib
-        ctx.save_for_backward(x, h0, weight_ih, weight_hh, bias_ih, bias_hh, gates, hs, hn)
-        return hs[:, 1:], hs[:, -1].clone()
-
-    @staticmethod
-    def backward(ctx, d_out, d_h):  # type: ignore[override]
-        x, h0, weight_ih, weight_hh, bias_ih, bias_hh, gates, hs, hn = ctx.saved_tensors
-        lib = ctx.lib
-        K, T, B, G = gates.shape
-        H = G // 3
-        d_x, d_s = torch.zeros_like(gates), torch.zeros_like(gates)  # (K, T, B, 3H) each
-        dh0 = gates.new_zeros(K, B, H)
-        bad: dict[int, tuple] = {}
-        for k in range(K):
-            dout_k = None if d_out is None else d_out[k]
-            dh_k = None if d_h is None else d_h[k]
-            if not native.all_finite(dout_k, dh_k):
-                need = (True, True, True, True, True, True)
-                bad[k] = gru._backward_reference(need, None if dout_k is None else dout_k.transpose(0, 1), dh_k,
-                                                 x[k].transpose(0, 1), h0[k], weight_ih[k], weight_hh[k], bias_ih[k],
-                                                 bias_hh[k])
-                continue
-            dout = native.own(dout_k, gates[k], (T, B, H))
-            dh = native.own(dh_k, gates[k], (B, H))
-            lib.gru_backward[gates.dtype](T, B, H, native.ptr(gates[k]), native.ptr(hs[k]), native.ptr(hn[k]),
-                                          native.ptr(weight_hh[k].detach().contiguous()), native.ptr(dout),
-                                          native.ptr(dh), native.ptr(d_x[k]), native.ptr(d_s[k]), lib.blas[gates.dtype])
-            dh0[k] = dh
-        flat_x, flat_s = d_x.view(K, T * B, G), d_s.view(K, T * B, G)
-        dx = bmm(flat_x, weight_ih).view(K, T, B, -1)
-        d_w_ih = bmm(x.reshape(K, T * B, -1).transpose(1, 2), flat_x).transpose(1, 2).contiguous()  # (K, 3H, C)
-        d_w_hh = bmm(hs[:, :-1].reshape(K, T * B, H).transpose(1, 2), flat_s).transpose(1, 2).contiguous()
-        d_b_ih, d_b_hh = flat_x.sum(1), flat_s.sum(1)
-        for k, (gx, gh, gwi, gwh, gbi, gbh) in bad.items():  # the members the reference took back
-            dx[k], dh0[k], d_w_ih[k], d_w_hh[k], d_b_ih[k], d_b_hh[k] = gx.transpose(0, 1), gh, gwi, gwh, gbi, gbh
-        return dx, dh0, d_w_ih, d_w_hh, d_b_ih, d_b_hh
-
-
-def gru_reference(x: torch.Tensor, h0: torch.Tensor, weight_ih: torch.Tensor, weight_hh: torch.Tensor,
-                  bias_ih: torch.Tensor, bias_hh: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """K GRU layers as plain PyTorch operations (autograd differentiates them): the stacked PyTorch path, on any
-    device. Shapes as :class:`StackedGRU`."""
-    K, T, B, C = x.shape
-    i_all = baddbmm(bias_ih.unsqueeze(1), x.reshape(K, T * B, C), weight_ih.transpose(1, 2)).view(K, T, B, -1)
-    w_hh_t = weight_hh.transpose(1, 2)
-    h, hs = h0, []
-    for t in range(T):
-        i_r, i_z, i_n = i_all[:, t].chunk(3, 2)
-        h_r, h_z, h_n = baddbmm(bias_hh.unsqueeze(1), h, w_hh_t).chunk(3, 2)
-        r, z = torch.sigmoid(i_r + h_r), torch.sigmoid(i_z + h_z)
-        h = (1 - z) * torch.tanh(i_n + r * h_n) + z * h
-        hs.append(h)
-    return torch.stack(hs, 1), h
-
-
-def peephole_reference(x: torch.Tensor, h0: torch.Tensor, c0: torch.Tensor, weight_ih: torch.Tensor,
-                       weight_hh: torch.Tensor, bias: torch.Tensor, w_ci: torch.Tensor, w_cf: torch.Tensor,
-                       w_co: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """K peephole LSTM layers as plain PyTorch operations, one batched product per time step for all members
-    (autograd differentiates them): the stacked PyTorch path, on any device. Shapes as :class:`StackedPeephole`."""
-    K, T, B, C = x.shape
-    xw = baddbmm(bias.unsqueeze(1), x.reshape(K, T * B, C), weight_ih.transpose(1, 2)).view(K, T, B, -1)
-    w_hh_t = weight_hh.transpose(1, 2)
-    ci, cf, co = (w.unsqueeze(1) for w in (w_ci, w_cf, w_co))  # (K, 1, H)
-    h, c, hs = h0, c0, []
-    for t in range(T):
-        a_i, a_f, a_g, a_o = baddbmm(xw[:, t], h, w_hh_t).chunk(4, 2)  # each (K, B, H)
-        i = torch.sigmoid(a_i + ci * c)
-        f = torch.sigmoid(a_f + cf * c)
-        c = f * c + i * torch.tanh(a_g)
-        h = torch.sigmoid(a_o + co * c) * torch.tanh(c)
-        hs.append(h)
-    return torch.stack(hs, 1), h, c
-
-
-def _compiled(*tensors: torch.Tensor) -> bool:
-    return (tensors[0].device.type == "cpu" and tensors[0].dtype in (torch.float32, torch.float64)
-            and native.active() is not None)
-
-
-def peephole_layer(x, h0, c0, *weights):
-    """One stacked peephole layer: the compiled loop on the CPU where there is one (the trainer hands it finite
-    parameters only: a member whose parameters stop being finite has diverged and left), else the PyTorch loop."""
-    if _compiled(x):
-        return StackedPeephole.apply(x, h0, c0, *weights)
-    return peephole_reference(x, h0, c0, *weights)
-
-
-def gru_layer(x, h0, *weights):
-    """One stacked GRU layer: the compiled loop on the CPU where there is one (the trainer hands it finite
-    parameters only: a member whose parameters stop being finite has diverged and left), else the PyTorch loop."""
-    if _compiled(x):
-        return StackedGRU.apply(x, h0, *weights)
-    return gru_reference(x, h0, *weights)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -387,14 +174,14 @@ def encode(views: dict[str, torch.Tensor], shape: Shape, x: torch.Tensor, state:
     for layer in range(shape.layers):
         if shape.cell == "gru":
             h0 = x.new_zeros(K, B, H) if state is None else state[layer]
-            x, h = gru_layer(x, h0, *(views[f"rnn.{n}_l{layer}"] for n in ("weight_ih", "weight_hh", "bias_ih",
+            x, h = gru.stacked_layer(x, h0, *(views[f"rnn.{n}_l{layer}"] for n in ("weight_ih", "weight_hh", "bias_ih",
                                                                              "bias_hh")))
             new.append(h)
             continue
         h0, c0 = (x.new_zeros(K, B, H), x.new_zeros(K, B, H)) if state is None else state[layer]
         p = f"rnn.layers.{layer}."
         peep = [views.get(p + n, x.new_zeros(K, H)) for n in ("w_ci", "w_cf", "w_co")]  # no-peephole: zeros
-        x, h, c = peephole_layer(x, h0, c0, views[p + "weight_ih"], views[p + "weight_hh"], views[p + "bias"], *peep)
+        x, h, c = peephole.stacked_layer(x, h0, c0, views[p + "weight_ih"], views[p + "weight_hh"], views[p + "bias"], *peep)
         new.append((h, c))
     return x, new
 
