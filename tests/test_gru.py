@@ -83,3 +83,19 @@ def test_gru_classifier_trains_on_the_compiled_loop_and_falls_back_elsewhere(mon
     with native.disabled():
         net(x)
     assert len(calls) == 2, "with study.native disabled the layer is plain nn.GRU"
+
+
+def test_the_plain_reference_is_nn_grus_equations():
+    """``gru.reference`` (K stacked layers, time-major) with one member against ``nn.GRU`` itself, outputs and the
+    last state: the one plain definition the stacked compiled loop is held to (``tests/test_stack.py``)."""
+    from study.learn import gru
+
+    torch.manual_seed(0)
+    net = torch.nn.GRU(3, 5, 1, batch_first=True).double()
+    x = torch.randn(4, 7, 3, dtype=torch.float64)
+    h0 = torch.randn(1, 4, 5, dtype=torch.float64)
+    want, last = net(x, h0)
+    hs, h = gru.reference(x.transpose(0, 1)[None], h0, *(p[None] for p in (net.weight_ih_l0, net.weight_hh_l0,
+                                                                            net.bias_ih_l0, net.bias_hh_l0)))
+    torch.testing.assert_close(hs[0].transpose(0, 1), want, atol=1e-12, rtol=0)
+    torch.testing.assert_close(h, last, atol=1e-12, rtol=0)

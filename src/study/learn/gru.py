@@ -66,7 +66,7 @@ class GRUFunction(torch.autograd.Function):
         return dx, dh, d_w_ih, d_w_hh, d_b_ih, d_b_hh
 
 
-def stacked_reference(x: torch.Tensor, h0: torch.Tensor, weight_ih: torch.Tensor, weight_hh: torch.Tensor,
+def reference(x: torch.Tensor, h0: torch.Tensor, weight_ih: torch.Tensor, weight_hh: torch.Tensor,
                   bias_ih: torch.Tensor, bias_hh: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """K GRU layers as plain PyTorch operations, nn.GRU's equations (autograd differentiates them): the
     stacked PyTorch path, on any device, and the definition the compiled loops are tested against. Shapes as
@@ -84,12 +84,12 @@ def stacked_reference(x: torch.Tensor, h0: torch.Tensor, weight_ih: torch.Tensor
     return torch.stack(hs, 1), h
 
 
-def reference(x: torch.Tensor, h0: torch.Tensor, weight_ih: torch.Tensor, weight_hh: torch.Tensor,
+def _one_layer(x: torch.Tensor, h0: torch.Tensor, weight_ih: torch.Tensor, weight_hh: torch.Tensor,
               bias_ih: torch.Tensor, bias_hh: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """One GRU layer, batch-first: ``x`` (B, T, D), ``h0`` (B, H) -> all hidden states (B, T, H) and the last
-    (B, H); :func:`stacked_reference` with one member."""
-    hs, h = stacked_reference(x.transpose(0, 1).unsqueeze(0), h0.unsqueeze(0), weight_ih.unsqueeze(0),
-                              weight_hh.unsqueeze(0), bias_ih.unsqueeze(0), bias_hh.unsqueeze(0))
+    (B, H); :func:`reference` with one member."""
+    hs, h = reference(x.transpose(0, 1).unsqueeze(0), h0.unsqueeze(0), weight_ih.unsqueeze(0),
+                      weight_hh.unsqueeze(0), bias_ih.unsqueeze(0), bias_hh.unsqueeze(0))
     return hs[0].transpose(0, 1), h[0]
 
 
@@ -99,7 +99,7 @@ def _backward_reference(need: tuple[bool, ...], d_out: torch.Tensor | None, d_h:
     are not finite (a diverged loss), which it propagates as PyTorch does."""
     with torch.enable_grad():
         leaves = [t.detach().requires_grad_(n) for t, n in zip(inputs, need)]
-        out, last = reference(*leaves)
+        out, last = _one_layer(*leaves)
         pairs = [(o, g) for o, g in ((out, d_out), (last, d_h)) if g is not None]
         wanted = [t for t in leaves if t.requires_grad]
         grads = iter(torch.autograd.grad([o for o, _ in pairs], wanted, [g for _, g in pairs], allow_unused=True))
@@ -206,4 +206,4 @@ def stacked_layer(x, h0, *weights):
     parameters only: a member whose parameters stop being finite has diverged and left), else the PyTorch loop."""
     if _compiled(x):
         return StackedGRU.apply(x, h0, *weights)
-    return stacked_reference(x, h0, *weights)
+    return reference(x, h0, *weights)
