@@ -203,10 +203,10 @@ def _warn(message: str) -> None:
 
 def _add_tracker_options(p: argparse.ArgumentParser) -> None:
     """The colour tracker's options (fields of ``study.see.config.TrackConfig``), shared by track and classify."""
-    from study.see.config import PRESETS, TrackConfig  # no OpenCV
+    from study.see.config import COLORS, TrackConfig  # no OpenCV
 
     g = p.add_mutually_exclusive_group()
-    _add_fields(g, TrackConfig, ["color"], choices={"color": list(PRESETS)})
+    _add_fields(g, TrackConfig, ["color"], choices={"color": list(COLORS)})
     g.add_argument("--hsv", type=float, nargs=6, metavar=("H", "S", "V", "H", "S", "V"),
                    help="explicit HSV range, low then high, OpenCV scale (H 0-179, S and V 0-255); "
                    "a low H above the high H wraps through red")

@@ -51,7 +51,7 @@ class Video:
     label: str
     """'light' or 'heavy'."""
     color: str = "tennis"
-    """Tracker HSV preset."""
+    """The tracker's colour (``study.see.config.COLORS``)."""
     object_size: float = TENNIS_BALL
     """Equivalent-disc diameter of the object's image, metres (sets the pixel scale)."""
     rest_height: float = TENNIS_BALL / 2

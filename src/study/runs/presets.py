@@ -1,4 +1,5 @@
-"""How much of each experiment a preset runs: one :class:`Preset` per name of ``study.core.presets.NAMES``.
+"""How much of each experiment a preset runs: one :class:`Preset` per name of ``study.core.presets.NAMES``, with
+the numbers of ``study.core.presets.SIZES``.
 
 The training protocol itself is not here: it is ``study.learn.config.TrainConfig``'s defaults (Table 1's
 configuration on the paper preset), which a preset only shortens (the smoke preset trains for three
@@ -95,25 +96,8 @@ class Preset:
         return len(self.grid_lrs(cell)) * len(self.truncations) * len(self.dropouts) * len(self.batch_sizes)
 
 
-PRESETS: dict[str, Preset] = {
-    # The whole book in minutes on the smoke dataset: 2 grid points, 2 seeds, 3 lengths, 3 epochs.
-    "smoke": Preset(
-        name="smoke", length=1.0, lrs=(3e-3,), truncations=(10, 30), grid_seeds=(0, 1), seeds=(0, 1), data_seeds=(0, 1),
-        lengths=(0.5, 1.0, 1.5), length_seeds=(0, 1), max_epochs=3, patience=2, min_epochs=2, long_lengths=(1.5,),
-        protocol_seeds=(0,), first_patience=1, first_max_epochs=2, shape_train=4, shape_test=4,
-        certify_per_class=8, videos_per_class=2, real_clips=2, render_shadows=False,
-    ),
-    # The paper's scale: the grid is learning rate x truncation, 3 seeds a point: the two LSTM cells at lr 1e-3
-    # (at 3e-3 every one of their seeds stalled on the box-like priors, in every build until the one that
-    # dropped it), the GRU at 1e-3 and 3e-3; Table 1 with 5 seeds; the training protocols with 1; the length
-    # sweep with 2 seeds; the long-memory test at 6 s. The protocol (epochs, patience) is TrainConfig's own.
-    # The README gives the measured build time.
-    "paper": Preset(
-        name="paper", lrs=(1e-3,), cell_lrs=(("gru", (1e-3, 3e-3)),), truncations=(30, 90), grid_seeds=(0, 1, 2),
-        seeds=(0, 1, 2, 3, 4), data_seeds=(0, 1, 2), lengths=(0.5, 1.0, 2.0, 3.0, 6.0), length_seeds=(0, 1),
-        long_lengths=(6.0,), long_seeds=(0, 1, 2), protocol_seeds=(0,),
-    ),
-}
+PRESETS: dict[str, Preset] = {name: Preset(name=name, **presets.sizes(name, "runs")) for name in presets.NAMES}
+"""Every preset's experiment sizes (their numbers are ``study.core.presets.SIZES``'s)."""
 
 
 def preset(name: str) -> Preset:

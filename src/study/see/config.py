@@ -9,7 +9,7 @@ import numpy as np
 
 from study.core.errors import ConfigError, check_range
 
-PRESETS: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
+COLORS: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
     "tennis": ((22, 70, 90), (50, 255, 255)),
     "orange": ((3, 100, 25), (20, 255, 255)),
     "red": ((170, 120, 70), (8, 255, 255)),
@@ -36,7 +36,7 @@ class TrackConfig:
     """How the colour tracker finds the object."""
 
     color: str = "tennis"
-    """Name of an HSV preset in :data:`PRESETS` (ignored when ``hsv`` is given)."""
+    """Name of a colour in :data:`COLORS` (ignored when ``hsv`` is given)."""
     hsv: tuple[int, int, int, int, int, int] | None = None
     """Explicit HSV bounds (H, S, V low, then H, S, V high), OpenCV scale; overrides ``color``."""
     min_area: int = 4
@@ -71,9 +71,9 @@ class TrackConfig:
         """(low, high) HSV bounds as uint8 arrays of 3; raise :class:`ConfigError` if malformed."""
         if self.hsv is not None:
             return parse_hsv(self.hsv)
-        if self.color not in PRESETS:
-            raise ConfigError(f"color = {self.color!r} is not a preset; choose one of {', '.join(PRESETS)} or give --hsv")
-        lo, hi = PRESETS[self.color]
+        if self.color not in COLORS:
+            raise ConfigError(f"color = {self.color!r} is not a known colour; choose one of {', '.join(COLORS)} or give --hsv")
+        lo, hi = COLORS[self.color]
         return parse_hsv((*lo, *hi))
 
     def validate(self) -> None:

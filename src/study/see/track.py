@@ -7,7 +7,7 @@ positions into heights (``study.see.gaps``): from the camera's geometry and the 
 known (``study.see.camera``), else from a ground row and one scale; :func:`to_model_input`
 resamples the result to the classifier's frame rate and cuts or zero-pads it to its input length, as
 the paper did. The pieces are importable from here too, so ``from study import track`` gives the whole
-tracker: :class:`TrackConfig` and the colour presets (``study.see.config``), :class:`Trajectory`
+tracker: :class:`TrackConfig` and the colours it knows (``study.see.config.COLORS``), :class:`Trajectory`
 (``study.see.trajectory``), the CSV file (``study.see.trackfile``) and the overlay video
 (``study.see.overlay``).
 """
@@ -20,7 +20,7 @@ import numpy as np
 
 from study.core.errors import TrajectoryError, check_range
 from study.see.camera import Camera
-from study.see.config import PRESETS, TrackConfig, parse_hsv
+from study.see.config import COLORS, TrackConfig, parse_hsv
 from study.see.detect import detect_all
 from study.see.gaps import fill_gaps, resample, set_camera, set_scale
 from study.see.overlay import write_overlay
@@ -28,7 +28,7 @@ from study.see.smooth import smooth
 from study.see.trackfile import read_csv, write_csv
 from study.see.trajectory import STATUS, Trajectory
 
-__all__ = ["PRESETS", "STATUS", "Camera", "TrackConfig", "Trajectory", "detect_all", "fill_gaps", "parse_hsv",
+__all__ = ["COLORS", "STATUS", "Camera", "TrackConfig", "Trajectory", "detect_all", "fill_gaps", "parse_hsv",
            "read_csv", "resample", "set_camera", "set_scale", "smooth", "to_model_input", "track_video", "write_csv",
            "write_overlay"]
 

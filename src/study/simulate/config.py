@@ -131,9 +131,9 @@ class SynthConfig:
 
     @classmethod
     def preset(cls, name: str) -> SynthConfig:
-        """The config of a preset (``study.core.presets``): ``'paper'``, the paper's size (1000 train + 1000
-        test per class, 10 s); ``'smoke'``, a few short throws."""
-        return {"smoke": cls(n_train=8, n_test=8, duration=3.0), "paper": cls()}[presets.check(name)]
+        """The config of a preset (its sizes in ``study.core.presets.SIZES``): ``'paper'``, the paper's size (1000
+        train + 1000 test per class, 10 s); ``'smoke'``, a few short throws."""
+        return cls(**presets.sizes(name, "data"))
 
     def replace(self, **changes: Any) -> SynthConfig:
         """A copy with ``changes`` applied, validated."""
