@@ -24,7 +24,6 @@ from tqdm import tqdm
 from study.core import ticket
 
 
-
 class Progress:
     """``with Progress("grid (Z)", total=16, note="3 cached") as p: ... p.update()`` -- a tqdm bar (if
     ``show``) and, where the chapter's ticket names a progress file, one JSON line per update appended to it."""

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Literal, get_args
+from typing import get_args
 
 import numpy as np
 
@@ -18,16 +18,11 @@ from study.learn.config import TrainConfig
 from study.learn.inputs import observe_fields
 from study.methods import ceiling
 from study.methods.tracker import TrackerError
+from study.report.motion import Air, View
 from study.simulate import observe
 from study.simulate.data import Dataset
 from study.simulate.synth import SynthConfig
 
-Air = Literal["air_on", "air_off"]
-"""The two data sets: the study's throws (air drag and added mass on), and the same throws without air."""
-View = Literal["exact", "near", "calibrated", "far"]
-"""How each air setting's positions are seen, in the table's order."""
-Observed = Literal["near", "calibrated", "far"]
-"""The views through a camera."""
 AIRS: tuple[Air, ...] = get_args(Air)
 VIEWS: tuple[View, ...] = get_args(View)
 SHORT: dict[View, str] = {"exact": "exact", "near": "1 px at 4 m", "calibrated": "tracker", "far": "1 px at 55 m"}

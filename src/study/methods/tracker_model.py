@@ -32,7 +32,8 @@ from study.core.errors import DataError
 from study.learn.metrics import Interval
 from study.methods import tracker
 from study.methods.videos import Video
-from study.report.reported import Number, Reported, count, number
+from study.report.cues import TrackerFitNumbers
+from study.report.reported import count, number
 from study.see import render
 from study.see.config import TrackConfig
 from study.simulate import observe
@@ -196,28 +197,6 @@ def _solve(stack: _Stack, w: np.ndarray) -> tuple[float, float, float, float]:
 
 # ---------------------------------------------------------------------------------------------
 # The fit
-
-
-@dataclass(frozen=True)
-class TrackerFitNumbers(Reported):
-    """The tracker's fitted error model as a chapter reports it (:meth:`TrackerFit.numbers`), metres."""
-
-    offset: Number
-    """Standard deviation of the per-throw offset (about 0: the offsets' common part is in it)."""
-    rho: Number
-    """Lag-1 autocorrelation of the varying error."""
-    flight: Number
-    """Standard deviation of the varying error in flight."""
-    contact: Number
-    """The same in contact."""
-    step_sd: Number
-    """The tracker's frame-to-frame error, measured (the fit reproduces it)."""
-    white_step_sd: Number
-    """What white noise at the tracker's pooled position error would make of it."""
-    drop: Number
-    """Share of the frames in view the tracker lost."""
-    videos: Number
-    """Rendered videos fitted on."""
 
 
 @dataclass(frozen=True)

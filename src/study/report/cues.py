@@ -8,7 +8,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 from study.learn.config import Dims
-from study.methods.tracker_model import TrackerFitNumbers
 from study.report.reported import Leaf, Number, Reported, Verdict, named
 
 Condition = Literal["a", "b", "c", "d"]
@@ -24,6 +23,28 @@ Group = Literal["exact", "random"]
 
 GROUPS: dict[Group, str] = {"exact": "trained on exact positions", "random": "trained on random observations"}
 """Each group of Z models in words."""
+
+
+@dataclass(frozen=True)
+class TrackerFitNumbers(Reported):
+    """The tracker's fitted error model as a chapter reports it (:meth:`TrackerFit.numbers`), metres."""
+
+    offset: Number
+    """Standard deviation of the per-throw offset (about 0: the offsets' common part is in it)."""
+    rho: Number
+    """Lag-1 autocorrelation of the varying error."""
+    flight: Number
+    """Standard deviation of the varying error in flight."""
+    contact: Number
+    """The same in contact."""
+    step_sd: Number
+    """The tracker's frame-to-frame error, measured (the fit reproduces it)."""
+    white_step_sd: Number
+    """What white noise at the tracker's pooled position error would make of it."""
+    drop: Number
+    """Share of the frames in view the tracker lost."""
+    videos: Number
+    """Rendered videos fitted on."""
 
 
 @dataclass(frozen=True)

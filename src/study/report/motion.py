@@ -6,9 +6,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal, get_args
 
-from study.methods.camera import Air, Observed, View
 from study.report.reported import Number, Reported, named
 
+Air = Literal["air_on", "air_off"]
+"""The two data sets: the study's throws (air drag and added mass on), and the same throws without air."""
+View = Literal["exact", "near", "calibrated", "far"]
+"""How each air setting's positions are seen, in the table's order."""
+Observed = Literal["near", "calibrated", "far"]
+"""The views through a camera."""
 Network = Literal["peephole_positions", "peephole_velocity", "gru_velocity"]
 """The networks trained on each column's condition, each at its own configuration."""
 

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+
 def device(name: str = "auto") -> str:
     """The torch device ``name`` names: ``"auto"`` is ``"cuda"`` where a GPU is at hand, else ``"cpu"``."""
     if name != "auto":
