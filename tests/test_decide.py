@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from study.book import results
-from study.chapters import decision, motion
+from study.chapters import decision
 from study.core.errors import ConfigError
-from study.methods import calibration, operating
+from study.methods import calibration, camera, operating
 from study.methods.tracker import TrackerError
 from study.runs import Runner, paper
 
@@ -339,16 +339,16 @@ def test_the_camera_network_is_chosen_on_observed_validation_and_the_splits_are_
     monkeypatch.setattr(calibration, "observation", lambda runner: error.observation())
     for inputs in ("positions", "velocity"):
         cache_records(runner, paper.grid_configs(p, "peephole", inputs), test=False)
-    column = next(c for c in motion.columns(error) if c.air and c.name == "calibrated")
-    observed = {k: motion.trained_config(runner.table1_config(k), column) for k in ("positions", "velocity")}
+    column = next(c for c in camera.columns(error) if c.air and c.name == "calibrated")
+    observed = {k: camera.trained_config(runner.table1_config(k), column) for k in ("positions", "velocity")}
     for k, cfg in observed.items():
         val = 0.8 if k == "positions" else 0.6
         cache_records(runner, paper.seed_configs(cfg, p.grid_seeds, ("z",)), val_score=lambda c, v=val: v)
-    camera = decision.camera_network(runner)
-    assert camera.best == "positions" and camera.val == pytest.approx({"positions": 0.8, "velocity": 0.6})
-    assert camera.config.loss_at == "every" and camera.config.observe == "fixed"
-    assert camera.config.observe_noise == 0.015
-    assert camera.config.inputs == "positions" and camera.config.observe_drop == 0.05
+    chosen = decision.camera_network(runner)
+    assert chosen.best == "positions" and chosen.val == pytest.approx({"positions": 0.8, "velocity": 0.6})
+    assert chosen.config.loss_at == "every" and chosen.config.observe == "fixed"
+    assert chosen.config.observe_noise == 0.015
+    assert chosen.config.inputs == "positions" and chosen.config.observe_drop == 0.05
     sp = decision.splits(runner)
     T = runner.table1_config().n_frames(runner.fps)
     assert sp.certify_x.shape == (2 * p.certify_per_class, T + 2, 3)

@@ -14,7 +14,7 @@ from fake_runs import cache_models, cache_records, cache_rocket
 from study.book import results
 from study.chapters import engine, motion
 from study.learn.metrics import Interval
-from study.methods import ceiling
+from study.methods import camera, ceiling
 from study.methods.tracker import TrackerError
 from study.report import verdicts
 from study.runs import Runner, paper
@@ -157,7 +157,7 @@ def test_every_learner_is_trained_in_one_engine_and_tested_in_both(e):
         assert x.correct.shape[0] == (1 if x.learner == "rule" else 2)
         if x.learner in engine.NETWORKS:
             assert x.failed == e.numbers.cross[x.learner][x.column.name][f"{x.train}_to_{x.test}"].source["failed"]
-    assert e.numbers.ceiling.value == pytest.approx(motion.column_ceiling(synth.SynthConfig.preset("smoke"),
+    assert e.numbers.ceiling.value == pytest.approx(camera.column_ceiling(synth.SynthConfig.preset("smoke"),
                                                                           e.columns[0]))
     assert set(e.agreement) == set(engine.AGREEMENT) and len(e.test_y) == len(e.agreement["bounces"])
     assert e.checks.flight_error.max() < 1e-6 and set(e.checks.rebound) == set(engine.DROPS)
@@ -174,7 +174,7 @@ def test_the_mass_only_classes_share_everything_but_the_mass():
     assert m.light.restitution == m.heavy.restitution == (0.1, 0.75), "the span of both classes' priors"
     assert m.light.friction == m.heavy.friction == (0.3, 0.7)
     assert (m.light.mass, m.heavy.mass) == (prior.light.mass, prior.heavy.mass)
-    assert ceiling.exact_ceiling(m, motion.AIR_OFF_PARAMETERS) == pytest.approx(0.5), "told e and mu: a guess"
+    assert ceiling.exact_ceiling(m, camera.AIR_OFF_PARAMETERS) == pytest.approx(0.5), "told e and mu: a guess"
     assert engine.paired_masses(prior) == pytest.approx((np.sqrt(0.1 * 0.6), np.sqrt(3.0 * 25.0)))
 
 

@@ -7,9 +7,8 @@ import pytest
 import torch
 
 from study.core.errors import ConfigError, TrajectoryError
-from study.learn import native
+from study.learn import native, peephole
 from study.learn.config import INPUTS
-from study.learn import peephole
 from study.learn.model import CELLS, Classifier, PeepholeLSTM
 from study.learn.stream import Streamer
 

@@ -14,6 +14,7 @@ from study.book import results
 from study.chapters import motion
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
+from study.methods import camera
 from study.methods.tracker import TrackerError
 from study.report.text import pct, pct_ci, seeds_ci
 from study.runs import Runner, paper, stats
@@ -29,7 +30,7 @@ WHITE = TrackerError(noise_px=1.02, noise_m=0.0141, drop=0.05, n_frames=100, met
 
 
 def test_the_columns_come_from_the_camera_model():
-    cols = motion.columns(CAL)
+    cols = camera.columns(CAL)
     assert [(c.air, c.name) for c in cols] == [(a, n) for a in (True, False) for n in ("exact", "near", "calibrated", "far")]
     near = next(c for c in cols if c.name == "near")
     far = next(c for c in cols if c.name == "far")
@@ -43,7 +44,7 @@ def test_the_columns_come_from_the_camera_model():
     assert "3.1 mm" in near.label and "42.2 mm" in far.label and "20.0 mm in flight" in cols[2].label
     assert "autocorrelation 0.84" in cols[2].label and "offset 6.0 mm" in cols[2].label
     assert [c.key for c in cols[3:5]] == ["air_on.far", "air_off.exact"] and cols[6].heading == "air off, tracker"
-    white = motion.columns(WHITE)[2]  # a TrackerError: its white noise
+    white = camera.columns(WHITE)[2]  # a TrackerError: its white noise
     assert white.tracker is None and white.noise == 0.0141 and "white noise of 14.1 mm" in white.label
 
 
@@ -53,7 +54,7 @@ def test_the_calibrated_column_draws_correlated_noise_and_the_reference_columns_
     x = np.zeros((400, 60, 3))
     x[:, :, 2] = 1.0  # in flight throughout
     ds = Dataset(train=Split(x, np.zeros(400, int), {}), test=Split(x, np.zeros(400, int), {}), fps=30.0)
-    near, cal = motion.columns(Observation(tracker=MODEL))[1:3]
+    near, cal = camera.columns(Observation(tracker=MODEL))[1:3]
     lag1 = lambda e: np.corrcoef(e[:, :-1].ravel(), e[:, 1:].ravel())[0, 1]  # noqa: E731
     e_cal, e_near = cal.inputs(ds, 60)[1][:, :, 2] - 1.0, near.inputs(ds, 60)[1][:, :, 2] - 1.0
     assert lag1(e_cal) > 0.8 and abs(lag1(e_near)) < 0.05
@@ -62,17 +63,17 @@ def test_the_calibrated_column_draws_correlated_noise_and_the_reference_columns_
 
 def test_each_network_trains_on_the_condition_it_is_tested_on():
     base = {n: TrainConfig(dims="xyz") for n in motion.NETWORKS + ("peephole_exact_trained",)}
-    exact, observed = motion.columns(CAL)[0], motion.columns(CAL)[2]
+    exact, observed = camera.columns(CAL)[0], camera.columns(CAL)[2]
     assert set(motion.network_configs(base, exact)) == set(motion.NETWORKS), "no exact-trained row where all are exact"
     cfgs = motion.network_configs(base, observed)
     c = cfgs["peephole_positions"]
     assert c.observe == "fixed" and c.observe_noise == MODEL.flight and c.observe_rho == MODEL.rho
     assert c.observe_offset == MODEL.offset and c.observe_contact_ratio == pytest.approx(0.4)
     assert c.observe_drop == CAL.drop and c.dims == "z"
-    near = motion.network_configs(base, motion.columns(CAL)[1])["peephole_positions"]
+    near = motion.network_configs(base, camera.columns(CAL)[1])["peephole_positions"]
     assert (near.observe_rho, near.observe_offset, near.observe_contact_ratio) == (0.0, 0.0, 1.0), "white"
     assert cfgs["peephole_exact_trained"].observe == "exact"
-    plan = motion.plan({True: "on", False: "off"}, base, motion.columns(CAL), (0, 1, 2))
+    plan = motion.plan({True: "on", False: "off"}, base, camera.columns(CAL), (0, 1, 2))
     assert [r for r, _, _ in plan] == ["on"] * 4 + ["off"] * 4 and all(test for _, _, test in plan)
     assert sum(len(c) for _, c, _ in plan) == 3 * (2 * 3 + 6 * 4), "3 seeds: 3 nets per exact column, 4 observed"
 
@@ -85,7 +86,7 @@ def test_the_learners_are_the_peephole_lstm_by_name_never_lstm():
 def test_the_best_learner_is_tied_when_the_paired_difference_spans_zero():
     rng = np.random.default_rng(0)
     truth = rng.random((3, 2000)) < 0.8
-    col = motion.columns(CAL)[0]
+    col = camera.columns(CAL)[0]
     same = [motion.Entry("physics", col, truth), motion.Entry("rule", col, truth.copy())]
     assert motion.best_of(same).tied
     worse = truth & (rng.random((3, 2000)) < 0.8)
@@ -96,8 +97,8 @@ def test_the_best_learner_is_tied_when_the_paired_difference_spans_zero():
 
 def test_the_ceiling_of_a_column_knows_the_mass_only_with_air():
     cfg = synth.SynthConfig.preset("paper")
-    on, off = motion.columns(CAL)[0], motion.columns(CAL)[4]
-    assert motion.column_ceiling(cfg, on) == 1.0 and 0.5 < motion.column_ceiling(cfg, off) < 1.0
+    on, off = camera.columns(CAL)[0], camera.columns(CAL)[4]
+    assert camera.column_ceiling(cfg, on) == 1.0 and 0.5 < camera.column_ceiling(cfg, off) < 1.0
 
 
 def test_seeds_agree_unless_one_interval_misses_another():
@@ -121,7 +122,7 @@ def test_a_column_draws_the_same_noise_for_every_engine_and_its_own_per_column()
     rng = np.random.default_rng(0)
     split = lambda: Split(rng.random((4, 40, 3)), np.array([0, 1, 0, 1]), {})  # noqa: E731
     ds = Dataset(train=split(), test=split(), fps=30.0)
-    cols = motion.columns(CAL)
+    cols = camera.columns(CAL)
     exact, cal_on, cal_off = cols[0], cols[2], cols[6]
     assert all(np.array_equal(a, b) for a, b in zip(exact.inputs(ds, 30), (ds.train.x[:, :30], ds.test.x[:, :30])))
     a, b = cal_off.inputs(ds, 30), cal_off.inputs(ds, 30)
@@ -154,7 +155,7 @@ def m(tmp_path_factory) -> motion.Motion:
         cache_records(runner, paper.grid_configs(p, cell), test=False, val_score=_val)
     cache_records(runner, paper.grid_configs(p, "peephole", "velocity"), test=False, val_score=_val)
     cfgs = motion.configs(runner)
-    cols = motion.columns(CAL)
+    cols = camera.columns(CAL)
     on = {True: runner, False: runner.air_off()}
     for r, batch, _ in motion.plan(on, cfgs, cols, p.grid_seeds):
         cache_records(r, batch, val_score=_val, val_loss=_loss)
@@ -173,7 +174,7 @@ def m(tmp_path_factory) -> motion.Motion:
 def test_every_number_keeps_its_name_and_reads_back_from_the_results_file(m, tmp_path):
     names = [name for name, _ in m.numbers.entries()]
     assert len(names) == len(set(names)) == 3 + 3 + 3 * 8 + 6 + 3 * 8 + 1 + 2 * 8
-    views = [c.key for c in motion.columns(CAL)]
+    views = [c.key for c in camera.columns(CAL)]
     for learner in ("peephole_positions", "peephole_velocity", "gru_velocity", "minirocket", "physics", "rule"):
         assert all(f"motion.{learner}.{v}" in names for v in views)
     assert "motion.peephole_exact_trained.air_on.near" in names
@@ -195,7 +196,7 @@ def test_each_entry_is_what_its_learner_got_right(m):
         source = m.numbers.learners[learner][e.column.air_key][e.column.name].source
         assert source["seeds"] == ([0, 1] if seeded else []) and source["failed"] == e.failed
     assert m.entries["minirocket", PERFECT].correct.all()
-    assert m.entries["rule", "air_off.exact"].feature in motion.RULE_FEATURES
+    assert m.entries["rule", "air_off.exact"].feature in camera.RULE_FEATURES
     assert all(m.entries[n, "air_on.exact"].val == pytest.approx(0.75) for n in motion.NETWORKS), "mean of 0.8, 0.7"
 
 

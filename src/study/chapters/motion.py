@@ -34,27 +34,21 @@ import numpy as np
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.methods import calibration, ceiling, learners
-from study.methods.camera import (  # noqa: F401
+from study.methods.camera import (
     AIR_OFF_PARAMETERS,
     AIR_ON_PARAMETERS,
-    AIRS,
-    FAR,
-    NEAR,
-    ROWS_1080,
     RULE_FEATURES,
     SHORT,
-    VIEWS,
     Air,
     Column,
-    Observed,
     View,
     column_ceiling,
     columns,
     trained_config,
 )
-from study.report.motion import (  # noqa: F401
+from study.report.motion import (
     LEARNERS,
-    SHOWN,
+    SHOWN,  # noqa: F401  (the learners the page's figure draws)
     Best,
     Ceiling,
     Learner,
@@ -71,6 +65,8 @@ from study.simulate.synth import SynthConfig
 NETWORKS: tuple[Network, ...] = get_args(Network)
 NAMES: dict[Learner, str] = learners.NAMES  # type: ignore[assignment]
 """Each learner in words."""
+
+
 # ---------------------------------------------------------------------------------------------
 # The networks' configurations and runs
 
