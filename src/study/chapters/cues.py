@@ -60,7 +60,7 @@ from study.report.text import Table, pct_ci, seeds_ci
 from study.runs import paper
 from study.runs.runner import Runner
 from study.runs.runtable import Runs
-from study.runs.stats import scored
+from study.runs.stats import correct_of, scored
 from study.simulate import data, measure, observe, synth
 from study.simulate.scene import Shape
 
@@ -240,7 +240,7 @@ def conditions(runner: Runner, cfg: TrainConfig) -> Conditions:
     x_obs, x_obs_train = calibration.observed(runner, "test", calibrated, T), calibration.observed(runner, "train", calibrated, T)
 
     def observed_correct(models: list[TrainedModel]) -> np.ndarray:
-        return np.stack([m.predict_proba(x_obs).argmax(1) == ds.test.y for m in models])
+        return correct_of(models, x_obs, ds.test.y)
 
     correct: dict[tuple[Condition, Dims], np.ndarray] = {
         ("a", "xyz"): exact.where(dims="xyz").correct(), ("a", "z"): exact.where(dims="z").correct(),

@@ -18,15 +18,16 @@ observed test split, or each engine's). The implementations:
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from study.learn import baseline
 from study.learn.config import Dims, TrainConfig
 from study.methods.rockets import rocket_predictions
+from study.runs.stats import correct_of
 from study.simulate import measure, observe
 
 if TYPE_CHECKING:
@@ -41,12 +42,6 @@ NAMES: dict[str, str] = {
     "gru_velocity": "GRU, with velocity", "peephole_exact_trained": "peephole LSTM, positions, trained exact",
     "minirocket": "MiniRocket, positions", "physics": "physics baseline", "rule": "best one-feature rule"}
 """Each learner of the motion and engine chapters, in words."""
-
-
-def correct_of(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """(S, n) bool: model s (anything with ``predict_proba``) called throw i of ``x`` (n, T, 3) right."""
-    y = np.asarray(y)
-    return np.stack([m.predict_proba(x).argmax(1) == y for m in models])
 
 
 @dataclass(frozen=True)

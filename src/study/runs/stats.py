@@ -88,11 +88,16 @@ def validation_pick(per_data: Sequence[Runs]) -> ValidationPick:
     return ValidationPick(picked, iv)
 
 
+def correct_of(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """(S, n) bool: model s (anything with ``predict_proba``) called trajectory i of ``x`` (n, T, 3) right."""
+    y = np.asarray(y)
+    return np.stack([m.predict_proba(x).argmax(axis=1) == y for m in models])
+
+
 def scored(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> Interval:
     """The mean accuracy of ``models`` on trajectories ``x`` (n, T, 3) with labels ``y``, and its bootstrap
     interval over the trajectories and the models (seeds)."""
-    correct = np.stack([m.predict_proba(x).argmax(axis=1) == np.asarray(y) for m in models])
-    return bootstrap_accuracy(correct)
+    return bootstrap_accuracy(correct_of(models, x, y))
 
 
 @dataclass(frozen=True)
