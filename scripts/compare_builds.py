@@ -32,6 +32,8 @@ import numpy as np
 from study.book import results
 from study.report.reported import Number
 
+SOURCE_DATASET_KEYS = ("data_key", "data")
+"""Names under which a number's source gives the key of a data set (which hashes the simulation's code): skipped."""
 TIMING = ("time.",)
 """Names of numbers that are wall-clock times: listed, never compared."""
 RECORD_SKIP = ("key", "data_key", "train_seconds")
@@ -74,7 +76,7 @@ def _leaf(leaf) -> dict:
     (``signed``) and the dataset key its source names (which hashes the simulation's code)."""
     out = {"what": leaf.what, "verdict": leaf.verdict,
            "decision": None if leaf.decision is None else leaf.decision.inputs,
-           "source": {k: v for k, v in leaf.source.items() if k != "data_key"}}
+           "source": {k: v for k, v in leaf.source.items() if k not in SOURCE_DATASET_KEYS}}
     if isinstance(leaf, Number):
         out.update(value=leaf.value, lo=leaf.lo, hi=leaf.hi, method=leaf.method, unit=leaf.unit, paper=leaf.paper)
     return json.loads(_canon(out))

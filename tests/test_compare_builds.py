@@ -59,3 +59,19 @@ def test_a_moved_number_or_a_changed_verdict_is_caught(tmp_path, capsys):
     _new_build(tmp_path / "c", verdict=verdicts.not_comparable("another kind"))
     assert _script().main([str(tmp_path / "a"), str(tmp_path / "c")]) == 1
     assert "differs: table1.verdict" in capsys.readouterr().out
+
+
+def test_a_data_sets_key_in_a_source_is_not_compared_but_any_other_source_field_is(tmp_path):
+    """A data set's key hashes the simulation's code, which a refactor moves (the engine chapter names it ``data``,
+    others ``data_key``); the seeds a number was computed from are what it is."""
+    def build(root: Path, **source) -> None:
+        (root / "_build").mkdir(parents=True)
+        (root / "data" / "runs").mkdir(parents=True)
+        leaf = reported.number(Interval(0.7, 0.68, 0.72, "bootstrap"), "mass only", **source)
+        (root / "_build" / "results.json").write_text(results.dumps([("engine.mass_only.bullet.accuracy", leaf)],
+                                                                     preset="smoke"))
+    build(tmp_path / "a", data="7471c58c8cd35bbc", data_key="c53cc2fa453ad5a2", seeds=[0, 1])
+    build(tmp_path / "b", data="74bece103e0c5818", data_key="89c6d7290de8675c", seeds=[0, 1])
+    build(tmp_path / "c", data="74bece103e0c5818", seeds=[0, 2])
+    assert _script().main([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
+    assert _script().main([str(tmp_path / "a"), str(tmp_path / "c")]) == 1
