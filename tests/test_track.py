@@ -181,8 +181,8 @@ def test_malformed_hsv(hsv, rendered):
         track.track_video(rendered.video, track.TrackConfig(hsv=hsv, progress=False))
 
 
-def test_unknown_preset(rendered):
-    with pytest.raises(ConfigError, match="preset"):
+def test_unknown_colour(rendered):
+    with pytest.raises(ConfigError, match="color = 'mauve' is not a known colour; choose one of tennis"):
         track.track_video(rendered.video, track.TrackConfig(color="mauve", progress=False))
 
 
