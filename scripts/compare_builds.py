@@ -36,7 +36,7 @@ SOURCE_DATASET_KEYS = ("data_key", "data")
 """Names under which a number's source gives the key of a data set (which hashes the simulation's code): skipped."""
 TIMING = ("time.",)
 """Names of numbers that are wall-clock times: listed, never compared."""
-RECORD_SKIP = ("key", "data_key", "train_seconds")
+RECORD_SKIP = ("key", "data_key", "train_seconds", "cpu_seconds")
 """Fields of a run record that hash code or time it, not what it computed."""
 
 

@@ -19,6 +19,8 @@ OTHERS = [dataclasses.replace(SMOKE, seed=s, lr=lr, dropout=d, max_epochs=e, min
           ((1, 3e-3, 0.2, 4), (2, 1e-3, 0.0, 2), (3, 1e-3, 0.5, 4), (4, 2e-3, 0.2, 1), (5, 1e-3, 0.2, 4),
            (6, 1e-3, 0.1, 3), (7, 3e-4, 0.2, 4))]
 """Other members: other seeds, learning rates, dropouts and epoch caps (so the stack shrinks as they stop)."""
+RECIPE = dataclasses.replace(SMOKE, lr_schedule="cosine", warmup_epochs=1, max_epochs=3, average="ema", ema_decay=0.9)
+"""A member on a cosine budget with a warm-up, validating and keeping the moving average of its weights."""
 
 
 def _records(smoke_dataset, cfgs, tmp_path, name) -> list[dict]:
@@ -26,13 +28,13 @@ def _records(smoke_dataset, cfgs, tmp_path, name) -> list[dict]:
     out = records.train_stack(jobs, tmp_path / name)
     for rec in out:
         assert json.loads(records.record_path(tmp_path / name, rec["key"]).read_text()) == rec, "written as returned"
-    return [{k: v for k, v in r.items() if k != "train_seconds"} for r in out]
+    return [{k: v for k, v in r.items() if k not in ("train_seconds", "cpu_seconds")} for r in out]
 
 
 @pytest.mark.slow  # trains 12 smoke runs
 @pytest.mark.parametrize("cell", ["peephole", "gru"])
 def test_a_run_gives_the_same_record_alone_in_a_stack_of_3_and_of_8(smoke_dataset, tmp_path, cell):
-    """Bit for bit, train_seconds aside: each member its own seed, batch order, dropout masks, Adam and stop."""
+    """Bit for bit, training times aside: each member its own seed, batch order, dropout masks, Adam and stop."""
     base = dataclasses.replace(SMOKE, cell=cell)
     others = [dataclasses.replace(c, cell=cell) for c in OTHERS]
     alone = _records(smoke_dataset, [base], tmp_path, "alone")[0]
@@ -41,6 +43,16 @@ def test_a_run_gives_the_same_record_alone_in_a_stack_of_3_and_of_8(smoke_datase
     assert three[1] == alone and eight[4] == alone
     assert three[0] == eight[0] and three[2] == eight[1], "the other members agree too"
     assert len({r["epochs_run"] for r in eight}) > 1, "members stopped at different epochs: the stack shrank"
+
+
+@pytest.mark.slow  # trains 6 smoke runs
+def test_a_recipe_member_is_its_own_run_and_leaves_the_others_theirs(smoke_dataset, tmp_path):
+    """A cosine budget with warm-up and a weight average, alone and among members that stop early: bit for bit."""
+    alone = _records(smoke_dataset, [RECIPE, SMOKE], tmp_path, "alone")
+    mixed = _records(smoke_dataset, [OTHERS[0], RECIPE, SMOKE], tmp_path, "mixed")
+    assert mixed[1] == alone[0] and mixed[2] == alone[1]
+    assert alone[0]["epochs_run"] == RECIPE.max_epochs, "a cosine budget runs every epoch"
+    assert [h["lr"] for h in alone[0]["history"]] == [RECIPE.lr_at(e) for e in range(RECIPE.max_epochs)]
 
 
 @pytest.mark.slow  # trains 4 smoke runs on the PyTorch loop

@@ -12,6 +12,7 @@ import torch
 from study import cli
 from study.core.errors import ConfigError, ModelError, TrajectoryError
 from study.core.fielddoc import field_docs
+from study.learn.config import TrainConfig
 from study.learn import train
 from study.learn.config import CELLS, OLD_MEANING
 from study.simulate import data
@@ -347,7 +348,7 @@ def _as_old_format(folder, version: int) -> None:
 @pytest.mark.parametrize("version", [1, 2, 3])
 def test_an_old_format_model_reads_as_positions_with_its_old_meaning(tm, ds, tmp_path, version):
     folder = tm.save(tmp_path / "old")
-    assert json.loads((folder / "meta.json").read_text())["format"] == train.FORMAT == "study.model/4"
+    assert json.loads((folder / "meta.json").read_text())["format"] == train.FORMAT == "study.model/5"
     _as_old_format(folder, version)
     old = train.load(folder)
     assert old.config.inputs == "positions" and old.net.features.inputs == "positions"
@@ -504,3 +505,30 @@ def test_a_failure_verdict_fits_its_evidence():
     chance = train.TrainedModel(net, train.TrainConfig(), 30.0, n_val=400,
                                 history=[{"epoch": 0, "train_loss": 0.5, "val_loss": 0.5, "val_accuracy": 0.51}])
     assert chance.failed and "cannot be told from guessing" in chance.failure()
+
+
+def test_a_cosine_budget_warms_up_then_falls_to_its_floor():
+    cfg = TrainConfig(lr=2e-3, lr_schedule="cosine", warmup_epochs=4, max_epochs=24, lr_floor=0.05)
+    rates = [cfg.lr_at(e) for e in range(cfg.max_epochs)]
+    assert rates[:4] == pytest.approx([5e-4, 1e-3, 1.5e-3, 2e-3]), "linear warm-up to the rate"
+    assert rates[-1] == pytest.approx(1e-4) and all(a >= b for a, b in zip(rates[4:], rates[5:])), "down to 5 %"
+    assert not cfg.stops_early and TrainConfig().stops_early and TrainConfig().lr_at(3) is None
+
+
+@pytest.mark.parametrize("changes, field", [({"lr_schedule": "cosine", "warmup_epochs": 150}, "warmup_epochs"),
+                                            ({"warmup_epochs": -1}, "warmup_epochs"), ({"lr_floor": 0.0}, "lr_floor"),
+                                            ({"ema_decay": 1.0}, "ema_decay"), ({"average": "swa"}, "average")])
+def test_recipe_fields_out_of_range_name_themselves(changes, field):
+    with pytest.raises(ConfigError, match=f"TrainConfig.{field}"):
+        dataclasses.replace(TrainConfig(), **changes).check()
+
+
+@pytest.mark.slow  # two tiny runs
+def test_the_torch_lstm_trains_on_a_cosine_budget_and_keeps_its_average(smoke_dataset):
+    cfg = TrainConfig(cell="torch-lstm", length=1.0, max_epochs=3, truncation=10, lr_schedule="cosine",
+                      average="ema", ema_decay=0.5)
+    tm = train.fit(smoke_dataset, cfg, warn=False)
+    assert len(tm.history) == 3 and [h["lr"] for h in tm.history] == [cfg.lr_at(e) for e in range(3)]
+    plain = train.fit(smoke_dataset, dataclasses.replace(cfg, average="none"), warn=False)
+    kept = [p for p in tm.net.parameters()]
+    assert any(not torch.equal(a, b) for a, b in zip(kept, plain.net.parameters())), "the average is what is kept"

@@ -7,6 +7,7 @@ definitions, and the NumPy baseline can share them.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 from functools import cache
 from typing import Literal, get_args, get_type_hints
@@ -32,8 +33,12 @@ Inputs = Literal["positions", "velocity", "speed"]
 """What the network reads of the positions it is given: the positions (the paper's); the positions and their
 frame-to-frame velocity; or what of them does not depend on the throw's heading, the height, its velocity and the
 horizontal speed (``study.learn.model.Features``)."""
-Schedule = Literal["constant", "plateau"]
-"""Learning-rate schedules: fixed, or halved when the validation loss stalls for ``patience // 4`` epochs."""
+Schedule = Literal["constant", "plateau", "cosine"]
+"""Learning-rate schedules: fixed; halved when the validation loss stalls for ``patience // 4`` epochs; or a fixed
+budget of ``max_epochs``, a linear warm-up over ``warmup_epochs`` then a cosine decay to ``lr_floor`` of the rate
+(no early stopping: a run trains its whole budget and keeps its best validation epoch)."""
+Average = Literal["none", "ema"]
+"""Which weights are validated and kept: the optimiser's own, or their exponential moving average over steps."""
 
 DIMS: dict[Dims, tuple[int, ...]] = {"z": (2,), "xyz": (0, 1, 2)}
 """Columns of the (x, y, z) trajectory each input dimension name selects."""
@@ -81,8 +86,18 @@ class TrainConfig:
     clip_norm: float = 1.0
     """Clip the gradient's global norm to this before each step; 0: no clipping."""
     lr_schedule: Schedule = "constant"
-    """'constant', or 'plateau': halve the learning rate when the validation loss has not improved for a
-    quarter of ``patience`` epochs."""
+    """'constant'; 'plateau': halve the learning rate when the validation loss has not improved for a quarter of
+    ``patience`` epochs; or 'cosine': ``max_epochs`` epochs whatever happens (no early stopping), the rate rising
+    linearly over ``warmup_epochs`` and then falling along a half cosine to ``lr_floor`` of itself."""
+    warmup_epochs: int = 0
+    """With 'cosine': epochs of linear warm-up, the rate rising from ``lr / warmup_epochs`` to ``lr``."""
+    lr_floor: float = 0.01
+    """With 'cosine': the last epoch's rate over ``lr``."""
+    average: Average = "none"
+    """'none', or 'ema': validate and keep an exponential moving average of the weights (one update per step,
+    ``ema_decay``), which does not swing with each step as the weights do."""
+    ema_decay: float = 0.999
+    """With 'ema': the average's decay per step (0.999: about the last thousand steps)."""
     loss_at: Loss = "last"
     """'last': the loss is the answer's at the last frame (the paper's network); 'every': the mean of the
     answers' at every frame, so the network answers at every frame (back-propagation then runs through
@@ -144,9 +159,32 @@ class TrainConfig:
         check_range("TrainConfig.lr", self.lr, 0, lo_open=True)
         check_range("TrainConfig.val_fraction", self.val_fraction, 0, 1, lo_open=True, hi_open=True)
         check_range("TrainConfig.rotate (degrees)", self.rotate, 0.0, 180.0)
+        if not isinstance(self.warmup_epochs, int) or isinstance(self.warmup_epochs, bool) or self.warmup_epochs < 0:
+            raise ConfigError(f"TrainConfig.warmup_epochs = {self.warmup_epochs!r}; it must be a whole number >= 0")
+        if self.lr_schedule == "cosine" and self.warmup_epochs >= self.max_epochs:
+            raise ConfigError(f"TrainConfig.warmup_epochs = {self.warmup_epochs} leaves no epoch of the cosine budget "
+                              f"(max_epochs = {self.max_epochs}); use fewer warm-up epochs or more epochs")
+        check_range("TrainConfig.lr_floor", self.lr_floor, 0, 1, lo_open=True)
+        check_range("TrainConfig.ema_decay", self.ema_decay, 0, 1, lo_open=True, hi_open=True)
         if self.rotate and self.dims == "z":
             raise ConfigError(f"TrainConfig.rotate = {self.rotate!r} turns the horizontal coordinates, which dims 'z' "
                               "does not read; use rotate 0 or dims 'xyz'")
+
+    @property
+    def stops_early(self) -> bool:
+        """Whether a run may stop before ``max_epochs`` (``patience``): not on a cosine budget."""
+        return self.lr_schedule != "cosine"
+
+    def lr_at(self, epoch: int) -> float | None:
+        """The learning rate of ``epoch`` (0-based) on a cosine budget; None for the schedules that set it as they go
+        ('constant', 'plateau')."""
+        if self.lr_schedule != "cosine":
+            return None
+        if epoch < self.warmup_epochs:
+            return self.lr * (epoch + 1) / self.warmup_epochs
+        span = max(1, self.max_epochs - self.warmup_epochs - 1)
+        progress = min(1.0, (epoch - self.warmup_epochs) / span)
+        return self.lr * (self.lr_floor + (1 - self.lr_floor) * 0.5 * (1 + math.cos(math.pi * progress)))
 
     def n_frames(self, fps: float) -> int:
         """T in frames at ``fps``: ``round(length * fps)``, at least 1."""
@@ -179,16 +217,21 @@ def select_inputs(x: np.ndarray, dims: str, n_frames: int, what: str = "trajecto
 WHITE: dict[str, object] = {"observe_offset": 0.0, "observe_rho": 0.0, "observe_contact_ratio": 1.0}
 """The tracker-model fields at white noise: what every model saved before format 4 was observed with."""
 
+NO_RECIPE: dict[str, object] = {"warmup_epochs": 0, "lr_floor": 0.01, "average": "none", "ema_decay": 0.999}
+"""The recipe fields at what every model saved before format 5 was trained with: no warm-up, no averaging."""
+
 OLD_MEANING: dict[int, dict[str, object]] = {
     1: {"min_epochs": 0, "forget_bias": 0.0, "forget_init": "constant", "clip_norm": 0.0, "lr_schedule": "constant",
         "loss_at": "last", "observe": "exact", "observe_noise": 0.0, "observe_drop": 0.0, "inputs": "positions",
-        "rotate": 0.0, **WHITE},
-    2: {"inputs": "positions", "rotate": 0.0, **WHITE},
-    3: {"rotate": 0.0, **WHITE},
+        "rotate": 0.0, **WHITE, **NO_RECIPE},
+    2: {"inputs": "positions", "rotate": 0.0, **WHITE, **NO_RECIPE},
+    3: {"rotate": 0.0, **WHITE, **NO_RECIPE},
+    4: dict(NO_RECIPE),
 }
 """What the fields added after each model format meant before they existed: how a model saved in format 1
 was trained (no minimum, no forget bias, no clipping, a constant learning rate, positions), that a
-format-2 model reads positions, and that no model before format 4 was trained on rotated throws."""
+format-2 model reads positions, that no model before format 4 was trained on rotated throws, and that none before
+format 5 warmed up or averaged its weights."""
 
 
 @cache

@@ -241,6 +241,8 @@ class Member:
     best_epoch: int = 0
     best_flat: torch.Tensor | None = None
     """Its weights at its best validation epoch (at first: its initial weights)."""
+    ema: torch.Tensor | None = None
+    """With ``average='ema'``: the moving average of its weights (P,), which is validated and kept instead."""
     diverged: int | None = None
     total: float = 0.0
     order: torch.Tensor | None = None
@@ -280,7 +282,8 @@ def _member(dataset: Dataset, cfg: TrainConfig, device: torch.device) -> Member:
              if cfg.lr_schedule == "plateau" else None)
     dev = lambda t: t.to(device)  # noqa: E731
     return Member(cfg, lambda epoch: dev(view(epoch)), dev(torch.from_numpy(y[tr])), dev(torch.from_numpy(x_val)),
-                  dev(torch.from_numpy(y[va])), net, flat, gen, opt, sched, len(va), best_flat=first)
+                  dev(torch.from_numpy(y[va])), net, flat, gen, opt, sched, len(va), best_flat=first,
+                  ema=first.clone() if cfg.average == "ema" else None)
 
 
 def _dropout(members: Sequence[Member]) -> Callable[[torch.Tensor], torch.Tensor]:
@@ -310,8 +313,9 @@ def _losses(out: torch.Tensor, y: torch.Tensor, every: bool) -> list[torch.Tenso
 @torch.no_grad()
 def _validate(members: Sequence[Member], layout: Layout, sh: Shape, mean: torch.Tensor, std: torch.Tensor,
               batch: int = 1024) -> list[tuple[float, float]]:
-    """Each member's validation loss and accuracy (evaluation mode: no dropout), at the last frame."""
-    stacked = torch.stack([m.flat.detach() for m in members])
+    """Each member's validation loss and accuracy (evaluation mode: no dropout), at the last frame, of the weights
+    it keeps (:func:`kept`)."""
+    stacked = torch.stack([kept(m) for m in members])
     views = layout.views(stacked)
     n = sh.n_val
     out = []
@@ -379,6 +383,9 @@ def _epoch(active: list[Member], layout: Layout, sh: Shape, stats: dict, epoch: 
         m.x_tr = m.view(epoch)
         m.order = torch.randperm(sh.n_train, generator=m.gen)
         m.total = 0.0
+        lr = m.cfg.lr_at(epoch)  # a cosine budget sets each epoch's rate; the others set it as they go
+        if lr is not None:
+            m.opt.param_groups[0]["lr"] = lr
     going = list(active)
     every = sh.loss_at == "every"
     for i in range(0, sh.n_train, sh.batch_size):
@@ -414,7 +421,14 @@ def _epoch(active: list[Member], layout: Layout, sh: Shape, stats: dict, epoch: 
             if m.cfg.clip_norm > 0:
                 torch.nn.utils.clip_grad_norm_([m.flat], m.cfg.clip_norm, foreach=False)
             m.opt.step()
+            if m.ema is not None:
+                m.ema.mul_(m.cfg.ema_decay).add_(m.flat.detach(), alpha=1 - m.cfg.ema_decay)
             m.total += value * len(idx[0])
+
+
+def kept(m: Member) -> torch.Tensor:
+    """The weights ``m`` validates and keeps (P,): the moving average with ``average='ema'``, else its own."""
+    return m.ema if m.ema is not None else m.flat.detach()
 
 
 def _end_epoch(m: Member, epoch: int, val_loss: float, val_acc: float) -> None:
@@ -424,8 +438,8 @@ def _end_epoch(m: Member, epoch: int, val_loss: float, val_acc: float) -> None:
     if m.sched is not None:
         m.sched.step(val_loss)
     if val_loss < m.best_loss:
-        m.best_loss, m.best_epoch, m.best_flat = val_loss, epoch, m.flat.detach().clone()
-    elif epoch - m.best_epoch >= m.cfg.patience and epoch + 1 >= m.cfg.min_epochs:
+        m.best_loss, m.best_epoch, m.best_flat = val_loss, epoch, kept(m).clone()
+    elif m.cfg.stops_early and epoch - m.best_epoch >= m.cfg.patience and epoch + 1 >= m.cfg.min_epochs:
         m.done = True
 
 

@@ -21,9 +21,11 @@ be split differently across thread counts, and because independent runs parallel
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 import warnings
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -116,6 +118,22 @@ def evaluate(tm: TrainedModel, split: Split) -> dict[str, Any]:
     return metrics(split.y, pred)
 
 
+@contextlib.contextmanager
+def _weights(params: list[torch.Tensor], values: list[torch.Tensor] | None) -> Iterator[None]:
+    """``params`` holding ``values`` for the block (None: as they are), restored after."""
+    if values is None:
+        yield
+        return
+    saved = [p.detach().clone() for p in params]
+    with torch.no_grad():
+        torch._foreach_copy_(params, values)
+    try:
+        yield
+    finally:
+        with torch.no_grad():
+            torch._foreach_copy_(params, saved)
+
+
 def _fit_alone(dataset: Dataset, cfg: TrainConfig, progress: bool) -> TrainedModel:
     """The training loop of a cell without a stacked form (``'torch-lstm'``, ``nn.LSTM``): one run alone, its random
     numbers from torch's generator inside a fork seeded by ``cfg.seed``."""
@@ -142,7 +160,12 @@ def _fit_alone(dataset: Dataset, cfg: TrainConfig, progress: bool) -> TrainedMod
         best_loss, best_epoch, best_state = math.inf, 0, copy.deepcopy(net.state_dict())
         diverged: int | None = None
         bar = tqdm(range(cfg.max_epochs), desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
+        params = list(net.parameters())
+        ema = [p.detach().clone() for p in params] if cfg.average == "ema" else None
         for epoch in bar:
+            lr = cfg.lr_at(epoch)  # a cosine budget sets each epoch's rate; the others set it as they go
+            if lr is not None:
+                opt.param_groups[0]["lr"] = lr
             net.train()
             x_tr = view(epoch)  # the same positions each epoch, or another observation of them
             order = torch.randperm(len(y_tr))
@@ -158,19 +181,23 @@ def _fit_alone(dataset: Dataset, cfg: TrainConfig, progress: bool) -> TrainedMod
                 if cfg.clip_norm > 0:
                     torch.nn.utils.clip_grad_norm_(net.parameters(), cfg.clip_norm, foreach=True)
                 opt.step()
+                if ema is not None:
+                    torch._foreach_mul_(ema, cfg.ema_decay)
+                    torch._foreach_add_(ema, [p.detach() for p in params], alpha=1 - cfg.ema_decay)
                 total += loss.item() * len(idx)
             if diverged is not None:
                 history.append({"epoch": epoch, "train_loss": math.nan, "val_loss": math.nan, "val_accuracy": math.nan})
                 break
-            val_loss, val_acc = _loss_and_accuracy(net, x_va, y_va)
+            with _weights(params, ema):  # the averaged weights, where they are the ones kept
+                val_loss, val_acc = _loss_and_accuracy(net, x_va, y_va)
+                if val_loss < best_loss:
+                    best_loss, best_epoch, best_state = val_loss, epoch, copy.deepcopy(net.state_dict())
             history.append({"epoch": epoch, "train_loss": total / len(y_tr), "val_loss": val_loss, "val_accuracy": val_acc,
                             "lr": opt.param_groups[0]["lr"]})
             bar.set_postfix(val_loss=f"{val_loss:.3f}", val_acc=f"{val_acc:.3f}")
             if sched is not None:
                 sched.step(val_loss)
-            if val_loss < best_loss:
-                best_loss, best_epoch, best_state = val_loss, epoch, copy.deepcopy(net.state_dict())
-            elif epoch - best_epoch >= cfg.patience and epoch + 1 >= cfg.min_epochs:
+            if cfg.stops_early and epoch - best_epoch >= cfg.patience and epoch + 1 >= cfg.min_epochs:
                 break
         net.load_state_dict(best_state)
         net.eval()

@@ -33,14 +33,16 @@ from study.learn.model import Classifier
 THREADS = 1
 """CPU threads used by :func:`fit` (see the module docstring)."""
 
-FORMATS = {"study.model/1": 1, "study.model/2": 2, "study.model/3": 3, "study.model/4": 4}
+FORMATS = {"study.model/1": 1, "study.model/2": 2, "study.model/3": 3, "study.model/4": 4, "study.model/5": 5}
 """Every model format this code reads. Format 2 added the training fields min_epochs, forget_bias,
 forget_init, clip_norm, lr_schedule and the record of a diverged run; format 3 the input representation
 (``TrainConfig.inputs``: the classifier's first layer, with a mean and a standard deviation per channel);
 format 4 the rotation of the training throws (``TrainConfig.rotate``) and the input ``'speed'``, which a
-format-3 reader cannot build. An older directory is read with the later fields' old meaning
-(``OLD_MEANING``): positions, divided by their standard deviation; no rotation."""
-FORMAT = "study.model/4"
+format-3 reader cannot build; format 5 the training recipe's warm-up, cosine budget and weight averaging
+(``TrainConfig.warmup_epochs``, ``lr_floor``, ``average``, ``ema_decay``). An older directory is read with the
+later fields' old meaning (``OLD_MEANING``): positions, divided by their standard deviation; no rotation; no
+warm-up or averaging."""
+FORMAT = "study.model/5"
 FILES = ("weights.pt", "config.json", "normalisation.json", "history.json", "meta.json")
 """What a saved model directory holds."""
 

@@ -42,8 +42,9 @@ def local_cluster(workers: int) -> Any:
 
 
 def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
-    """The distinct models listed in the plan files ``parts`` and the CPU seconds their records took to train
-    (``train_seconds`` summed; a record that is missing counts nothing)."""
+    """The distinct models listed in the plan files ``parts`` and the process CPU seconds their records took to
+    train (``cpu_seconds`` summed, or the wall ``train_seconds`` of a record made before it was kept; a record that is
+    missing counts nothing)."""
     models: dict[str, str] = {}
     for part in parts:
         if not part.is_file():
@@ -55,5 +56,6 @@ def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
     seconds = 0.0
     for record in models.values():
         with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
-            seconds += float(json.loads(Path(record).read_text())["train_seconds"])
+            rec = json.loads(Path(record).read_text())
+            seconds += float(rec.get("cpu_seconds", rec["train_seconds"]))
     return {"models": float(len(models)), "train_seconds": seconds}

@@ -102,7 +102,8 @@ def train_stack(jobs: Sequence[tuple[Dataset, TrainConfig, bool]], data_dir: str
 
     A record holds the config, the validation accuracy and loss at the kept epoch, what the validation part says
     of the run (``training``; ``failed`` when it failed to train), whether it diverged (and when), the epochs run,
-    the history, the training time (a stack's time shared evenly by its members) and, if ``test``, the test metrics
+    the history, the training time, wall and process CPU (a stack's shared evenly by its members) and, if ``test``,
+    the test metrics
     with every test trajectory's probability of heavy. A member's record is the one it would have alone. The
     trained model itself is saved in :func:`model_dir`. A dataset without a key is never cached.
     """
@@ -123,18 +124,19 @@ def train_stack(jobs: Sequence[tuple[Dataset, TrainConfig, bool]], data_dir: str
         ds, c, _ = jobs[i]
         groups.setdefault(stack.shape(ds, c) if c.cell in stack.STACKABLE else ("alone", i), []).append(i)
     for group in groups.values():
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         if jobs[group[0]][1].cell in stack.STACKABLE:
             models = stack.train([(jobs[i][0], jobs[i][1]) for i in group], device)
         else:
             models = [train.fit(jobs[group[0]][0], jobs[group[0]][1], progress=False, warn=False)]
         seconds = (time.perf_counter() - t0) / len(group)
+        cpu = (time.process_time() - c0) / len(group)
         for i, tm in zip(group, models):
-            records[i] = _record(jobs[i][0], jobs[i][1], jobs[i][2], tm, seconds, data_dir, device)
+            records[i] = _record(jobs[i][0], jobs[i][1], jobs[i][2], tm, seconds, cpu, data_dir, device)
     return records  # type: ignore[return-value]
 
 
-def _record(dataset: Dataset, cfg: TrainConfig, test: bool, tm: train.TrainedModel, seconds: float,
+def _record(dataset: Dataset, cfg: TrainConfig, test: bool, tm: train.TrainedModel, seconds: float, cpu: float,
             data_dir: str | Path, device: str | torch.device) -> dict[str, Any]:
     """The record of a run just trained, written to the cache with its model."""
     key = run_key(dataset, cfg, test, device)
@@ -146,7 +148,7 @@ def _record(dataset: Dataset, cfg: TrainConfig, test: bool, tm: train.TrainedMod
         "device": device_name(device), "val_accuracy": tm.val_accuracy, "val_loss": best["val_loss"],
         "n_val": tm.n_val, "training": tm.training_state, "failed": tm.failed, "diverged_epoch": tm.diverged_epoch,
         "best_epoch": tm.best_epoch, "epochs_run": len(tm.history), "history": tm.history,
-        "train_seconds": seconds, "test": _test_scores(tm, dataset) if test else None,
+        "train_seconds": seconds, "cpu_seconds": cpu, "test": _test_scores(tm, dataset) if test else None,
     }
     if dataset.key:
         cache.write_text_atomic(record_path(data_dir, key), json.dumps(record, indent=1) + "\n")
