@@ -25,7 +25,7 @@ def test_a_change_inside_a_subpackage_changes_the_code_keys(tmp_path):
     before_synth = cache.source_hash("simulate.synth", root=copy)
     before_loop = cache.source_hash("learn/peephole.cpp", root=copy)
     with (copy / "simulate" / "synth.py").open("a") as f:
-        f.write("\n# an edit\n")
+        f.write("\n_AN_EDIT = 1\n")
     (copy / "learn" / "peephole.cpp").write_text((copy / "learn" / "peephole.cpp").read_text() + "\n// an edit\n")
     assert cache.source_hash(root=copy) != before_all
     assert cache.source_hash("simulate.synth", root=copy) != before_synth
@@ -39,8 +39,26 @@ def _copy_package(tmp_path) -> Path:
 
 
 def _append(copy: Path, rel: str) -> None:
+    """An edit of the code: a line of C++ comment (the compiled loops' bytes are hashed) or a Python statement."""
     with (copy / rel).open("a") as f:
-        f.write("\n// an edit\n" if rel.endswith((".cpp", ".h")) else "\n# an edit\n")
+        f.write("\n// an edit\n" if rel.endswith((".cpp", ".h")) else "\n_AN_EDIT = 1\n")
+
+
+def test_a_comment_or_a_docstring_changes_no_key_and_code_does(tmp_path):
+    """Keys hash each module's syntax tree without comments and docstrings: rewording retrains nothing."""
+    copy = _copy_package(tmp_path)
+    rel = "learn/train.py"
+    before = {p: cache.code_hash(p, root=copy) for p in cache.PRODUCERS}
+    words = cache.source_hash(root=copy, words=True)
+    text = (copy / rel).read_text()
+    assert text.startswith('"""')
+    reworded = '"""Reworded."""\n# a new comment\n' + text.split('"""', 2)[2].replace("\n\n\n", "\n\n\n# spaced\n\n", 1)
+    reworded = reworded.replace('    """Score ``tm`` on ``split``', '    """Scores ``tm``, reworded, on ``split``')
+    (copy / rel).write_text(reworded)
+    assert {p: cache.code_hash(p, root=copy) for p in cache.PRODUCERS} == before
+    assert cache.source_hash(root=copy, words=True) != words, "the builder's key of a chapter still sees words"
+    (copy / rel).write_text(reworded.replace("return metrics(split.y, pred)", "return metrics(split.y, pred[::-1])"))
+    assert cache.code_hash("run", root=copy) != before["run"]
 
 
 def test_every_key_follows_the_code_its_producer_imports(tmp_path):

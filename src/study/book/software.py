@@ -45,7 +45,7 @@ def compute(preset: str) -> Software:
         "PyTorch": torch.__version__,
         "OpenCV": cv2.__version__,
         "Matplotlib": matplotlib.__version__,
-        "study": f"{study.__version__} (source {source_hash()})",
+        "study": f"{study.__version__} (source {source_hash(words=True)})",
         "peephole LSTM time loop": "compiled (peephole.cpp, g++)" if native.backend() == "native"
         else "PyTorch operations (no C++ compiler)",
     }

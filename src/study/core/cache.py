@@ -58,19 +58,53 @@ def source_files(root: Path = PACKAGE_DIR) -> list[str]:
                   if p.suffix in SOURCE_SUFFIXES and p.is_file() and "__pycache__" not in p.parts)
 
 
-def source_hash(*names: str, root: Path = PACKAGE_DIR) -> str:
-    """Hash of the named source files of the package, or of all of them (:func:`source_files`).
+def source_hash(*names: str, root: Path = PACKAGE_DIR, words: bool = False) -> str:
+    """Hash of the named source files of the package, or of all of them (:func:`source_files`), each as its code
+    alone (:func:`code_digest`: a Python module's syntax tree without its comments and docstrings).
 
     A name is a module relative to the package (``"simulate.synth"``) or a file path relative to it
     (``"learn/peephole.cpp"``). Part of every cache key, so a change to the code that made a file makes
-    a new file. ``root``: the package folder (for tests on a copy of it).
+    a new file, and a change to its words does not; with ``words``, the files' bytes, words included (what the book's
+    builder keys a chapter's execution by: its text may quote a docstring). ``root``: the package folder (for tests
+    on a copy of it).
     """
     paths = [n if "/" in n or n.endswith(SOURCE_SUFFIXES) else n.replace(".", "/") + ".py" for n in names]
     h = hashlib.sha256()
     for rel in paths or source_files(root):
         h.update(rel.encode())
-        h.update((root / rel).read_bytes())
+        h.update((root / rel).read_bytes() if words else code_digest(root / rel))
     return h.hexdigest()[:16]
+
+
+class _NoDocstrings(ast.NodeTransformer):
+    """Drops every statement that is a bare string (docstrings, and the attribute docstrings under fields and
+    constants): it computes nothing."""
+
+    def generic_visit(self, node: ast.AST) -> ast.AST:
+        super().generic_visit(node)
+        for name in ("body", "orelse", "finalbody"):
+            body = getattr(node, name, None)
+            if isinstance(body, list) and body and all(isinstance(s, ast.stmt) for s in body):
+                kept = [s for s in body if not (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant)
+                                                and isinstance(s.value.value, str))]
+                setattr(node, name, kept or ([ast.Pass()] if name == "body" and not isinstance(node, ast.Module)
+                                             else kept))
+        return node
+
+
+def code_digest(path: Path) -> bytes:
+    """What of the source file ``path`` can change a result, as a digest: a Python module's syntax tree without
+    comments, docstrings or layout; any other file's bytes (the compiled loops' sources)."""
+    st = path.stat()
+    return _code_digest(path, st.st_mtime_ns, st.st_size)
+
+
+@functools.lru_cache(maxsize=1024)
+def _code_digest(path: Path, mtime_ns: int, size: int) -> bytes:
+    if path.suffix != ".py":
+        return hashlib.sha256(path.read_bytes()).digest()
+    tree = _NoDocstrings().visit(ast.parse(path.read_text(), filename=str(path)))
+    return hashlib.sha256(ast.dump(tree, annotate_fields=False, include_attributes=False).encode()).digest()
 
 
 def array_checksum(arrays: Mapping[str, np.ndarray]) -> str:
@@ -132,6 +166,7 @@ EXEMPT: dict[str, str] = {
     "core/progress.py": "progress on the terminal: what is shown while a product is made, not the product",
     "core/ticket.py": "where a chapter in a build writes its progress, numbers and plan (the device, which a run's key "
                       "names itself, passes through it): never what is computed",
+    "core/datadir.py": "where the caches are kept, never what is in them",
 }
 """Modules whose source is left out of every code key, each with the reason it cannot change a result."""
 NON_PYTHON: dict[str, tuple[str, ...]] = {
