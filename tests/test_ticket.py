@@ -38,3 +38,25 @@ def test_runs_asked_for_in_a_planned_build_are_listed_on_the_ticket(tmp_path, mo
     assert t.asked(), "the builder reads the ticket, not the exception, to know the chapter waits for runs"
     with pytest.raises(TypeError):
         dataclasses.replace(t, colour="red")
+
+
+def test_the_cache_folder_is_the_callers_then_the_builds_then_the_users_then_data(tmp_path, monkeypatch):
+    from study.core import datadir
+
+    monkeypatch.delenv(ticket.ENV, raising=False)
+    monkeypatch.delenv(datadir.ENV, raising=False)
+    assert datadir.resolve() == datadir.DEFAULT and datadir.resolve("") == datadir.DEFAULT
+    monkeypatch.setenv(datadir.ENV, str(tmp_path / "mine"))
+    assert datadir.resolve() == tmp_path / "mine"
+    monkeypatch.setenv(ticket.ENV, str(ticket.Ticket(data_dir=str(tmp_path / "build")).write(tmp_path / "t.json")))
+    assert datadir.resolve() == tmp_path / "build" and datadir.resolve(tmp_path / "given") == tmp_path / "given"
+
+
+def test_a_cache_folder_that_cannot_be_written_is_refused_before_any_work(tmp_path, capsys):
+    from study import cli
+
+    (tmp_path / "afile").write_text("not a folder")
+    assert cli.main(["book", "--root", str(tmp_path), "--preset", "smoke", "--data-dir",
+                     str(tmp_path / "afile" / "data"), "--no-build"]) == 2
+    err = capsys.readouterr().err
+    assert "cache folder" in err and "afile" in err and len(err.strip().splitlines()) == 1

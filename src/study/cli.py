@@ -66,7 +66,8 @@ def _add_synth(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="write the dataset to this file instead of data/synth-<hash>.npz",
     )
-    p.add_argument("--data-dir", type=Path, default=Path("data"), help="cache folder (default: %(default)s)")
+    p.add_argument("--data-dir", type=Path, default=None,
+                   help="cache folder (default: $STUDY_DATA_DIR, else data/ here)")
     p.add_argument("--threads", type=int, default=None, help="simulation threads (default: all cores)")
     from study.simulate.synth import SynthConfig
 
@@ -142,12 +143,19 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
         "as it would alone; their keys name the GPU, whose rounding may depend on the stack's size), or 'auto' "
         "(a GPU where there is one, said on the terminal)",
     )
+    p.add_argument(
+        "--data-dir",
+        type=Path,
+        default=None,
+        help="cache folder of every data set, run, model and video the chapters make (default: $STUDY_DATA_DIR, "
+        "else data/ under --root): keep it outside the work tree to resume a build from another checkout",
+    )
 
     def run(a: argparse.Namespace) -> int:
         from study import book
 
         book.build(root=a.root, preset=a.preset, force=a.force, only=a.only, html=not a.no_build, scheduler=a.scheduler,
-                   device=a.device)
+                   device=a.device, data_dir=a.data_dir)
         return 0
 
     p.set_defaults(run=run)

@@ -34,7 +34,7 @@ from tqdm import tqdm
 
 import study
 from study.book import nbtidy, results
-from study.core import presets, ticket
+from study.core import datadir, presets, ticket
 from study.core.cache import canonical_json, key, source_hash, write_text_atomic
 from study.core.errors import ChapterError, ConfigError, check_writable
 from study.core.progress import Follower
@@ -284,7 +284,7 @@ def _failure_message(ch: Chapter, err: Any, nb: Any, root: Path) -> str:
 
 
 def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], root: Path, pending: Path | None = None,
-             device: str = "") -> None:
+             device: str = "", data_dir: Path | None = None) -> None:
     """Run ``source_nb`` (the chapter ``nb`` as .ipynb) with papermill into its executed copy, atomically, with a
     ticket that gives it its files, its ``device`` and, in a planned build, ``pending``: where it lists the runs it
     needs that are not trained yet.
@@ -304,7 +304,7 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
     if pending is not None:
         pending.unlink(missing_ok=True)  # what this execution asks for, nothing older
     chapter_ticket = ticket.Ticket(progress=str(follow), results=str(ch.results_part), plan=str(ch.plan_part),
-                                   pending=str(pending or ""), device=device)
+                                   pending=str(pending or ""), device=device, data_dir=str(data_dir or ""))
     ticket_file = chapter_ticket.write(running.with_suffix(".ticket.json"))
     ch.results_part.unlink(missing_ok=True)  # written afresh by this run, or not at all
     ch.plan_part.unlink(missing_ok=True)
@@ -400,7 +400,8 @@ def _decide(ch: Chapter, current: str, force: bool, only: list[str] | None) -> t
 
 
 def execute(root: Path, preset: str, force: bool = False, only: list[str] | None = None,
-            scheduler: str = "", device: str = "cpu", workers: int = 0) -> dict[str, dict[str, Any]]:
+            scheduler: str = "", device: str = "cpu", workers: int = 0,
+            data_dir: Path | None = None) -> dict[str, dict[str, Any]]:
     """Execute (or reuse) every chapter of ``root``'s book; returns {stem: {"seconds", "cached", ...}}.
 
     ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, keeping the others'
@@ -428,7 +429,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     if unknown:
         raise ConfigError(f"--only {', '.join(unknown)}: no such chapter; the chapters are: {', '.join(stems)}")
     injected = {"preset": preset}
-    package = source_hash()
+    package = source_hash(words=True)
     timings: dict[str, dict[str, Any]] = {}
     stages: list[dict[str, Any]] = []
     done: list[tuple[Chapter, dict[str, Any], dict[str, Any], float]] = []
@@ -466,7 +467,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                     tqdm.write(f"{where}: {action} ({note})", file=sys.stderr)
                     continue
                 todo.append((n, ch, probe, nb, injected | runtime, {"base": base, "parameters": parameters}))
-            _run_planned(root, preset, chs, last, todo, timings, stages, done, Path(tmp), scheduler, device, workers)
+            _run_planned(root, preset, chs, last, todo, timings, stages, done, Path(tmp), scheduler, device, workers,
+                         cache_dir(root, data_dir))
     finally:
         # Keys last, once every chapter of this run has written what it writes: a chapter whose
         # input folder a later chapter adds to is not re-executed next time for that reason alone.
@@ -480,8 +482,15 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     return timings
 
 
+def cache_dir(root: Path, data_dir: Path | None = None) -> Path:
+    """The build's cache folder, absolute: ``data_dir``, else ``$STUDY_DATA_DIR``, else ``data/`` (a relative one
+    under ``root``, where the chapters run)."""
+    folder = datadir.resolve(data_dir)
+    return folder if folder.is_absolute() else (root / folder).resolve()
+
+
 def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter], todo: list, timings: dict,
-                 stages: list, done: list, tmp: Path, scheduler: str, device: str, workers: int) -> None:
+                 stages: list, done: list, tmp: Path, scheduler: str, device: str, workers: int, data: Path) -> None:
     """Execute the chapters of ``todo`` in rounds (see :func:`execute`), training each round's runs at once; the
     chapters that run last wait until every other chapter is done."""
     from study.runs import (
@@ -502,7 +511,8 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
                 tqdm.write(f"{where}: executing" + (f" (stage {len(stages) + 1})" if stages else ""), file=sys.stderr)
                 t0 = time.perf_counter()
                 try:
-                    _execute(ch, probe, nb, params, root, pending=_pending_file(tmp, ch, stages), device=device)
+                    _execute(ch, probe, nb, params, root, pending=_pending_file(tmp, ch, stages), device=device,
+                             data_dir=data)
                 except _Pending:
                     seconds = time.perf_counter() - t0
                     entry = timings.setdefault(ch.stem, {"seconds": 0.0, "cached": False})
@@ -535,7 +545,7 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
             t0 = time.perf_counter()
             tqdm.write(f"stage {len(stages) + 1}: {len(jobs)} runs that {len(waiting)} chapter(s) asked for, trained "
                        "together", file=sys.stderr)
-            schedule.run_many(jobs, root / "data", desc=f"stage {len(stages) + 1}", progress=True,
+            schedule.run_many(jobs, data, desc=f"stage {len(stages) + 1}", progress=True,
                               workers=workers or None, scheduler=scheduler or None, device=device)
             stages.append({"runs": len(jobs), "chapters": [t[1].stem for t in waiting],
                            "seconds": round(time.perf_counter() - t0, 3)})
@@ -644,7 +654,7 @@ def render_html(root: Path) -> Path:
 
 
 def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bool, scheduler: str = "",
-          device: str = "cpu") -> None:
+          device: str = "cpu", data_dir: Path | None = None) -> None:
     """Execute the chapters of the book at ``root`` with ``preset`` (cached, their runs planned and trained
     together: :func:`execute`), then, if ``html``, render it.
 
@@ -659,11 +669,12 @@ def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bo
     if not root.is_dir():
         raise ConfigError(f"--root {root}: no such folder")
     check_writable(root / EXECUTED / "timings.json", "book output folder")
+    check_writable(cache_dir(root, data_dir) / "README", "cache folder (--data-dir or $STUDY_DATA_DIR)")
     chosen = cluster.device(device)
     if device == "auto":
         tqdm.write(f"device: {chosen}" + (" (a GPU is at hand)" if chosen != "cpu" else " (no GPU here)"), file=sys.stderr)
     with _cluster(scheduler) as address:
-        timings = execute(root, preset, force=force, only=only, scheduler=address, device=chosen)
+        timings = execute(root, preset, force=force, only=only, scheduler=address, device=chosen, data_dir=data_dir)
     print(timings_table(timings, plan_totals(root)), file=sys.stderr)
     if html:
         index = render_html(root) / "index.html"

@@ -310,7 +310,7 @@ def robustness(models: Mapping[Group, Sequence[Any]], x: np.ndarray, y: np.ndarr
 
 
 def high_rate_test(preset: str, seed: int, seconds: float, fps: float = 120.0,
-                   data_dir: str | Path = "data") -> data.Dataset:
+                   data_dir: str | Path | None = None) -> data.Dataset:
     """The same test throws recorded at ``fps`` for ``seconds`` (a fast camera's view), one training throw
     per class (the test split's random streams do not depend on the training split's size)."""
     cfg = synth.SynthConfig.preset(preset).replace(fps=fps, duration=seconds + 2 / fps, n_train=1)
@@ -406,7 +406,7 @@ def shape_config(preset: str, shape: Shape, duration: float, n_train: int, n_tes
 
 
 def shape_sets(preset: str, seed: int, duration: float, n_train: int, n_test: int,
-               data_dir: str | Path = "data") -> dict[str, data.Dataset]:
+               data_dir: str | Path | None = None) -> dict[str, data.Dataset]:
     """One dataset per shape of :data:`SHAPES`, recorded for ``duration`` seconds, cached like any other."""
     return {name: synth.dataset(shape_config(preset, s, duration, n_train, n_test), seed, data_dir=data_dir,
                                 progress=False) for name, s in SHAPES.items()}

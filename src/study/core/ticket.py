@@ -6,7 +6,7 @@ starts one, it writes the chapter a :class:`Ticket` (a JSON file) and names it i
 
 - where the chapter's progress lines go (``study.core.progress``), its numbers (``study.book.results``) and the
   runs it was asked for (``study.runs.schedule.Plan``);
-- the torch device its runs train on;
+- the torch device its runs train on, and the build's cache folder;
 - in a build that trains every chapter's runs together, the file where the chapter lists the runs it needs that
   are not trained yet (``study.runs.schedule.ask``) before it stops: the builder reads that file, not the
   exception, to tell a chapter that waits for runs from one that failed (:meth:`Ticket.asked`).
@@ -41,6 +41,8 @@ class Ticket:
     """File the chapter lists the runs it needs that are not trained yet, before it stops ('' : it trains them)."""
     device: str = ""
     """The torch device its runs train on ('' : the CPU, or what the chapter asks for)."""
+    data_dir: str = ""
+    """The build's cache folder ('' : the chapter's own default, ``study.core.datadir``)."""
 
     def write(self, path: str | Path) -> Path:
         """Write the ticket to ``path`` (a JSON file) and return it."""

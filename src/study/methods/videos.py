@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from study import CLASSES
-from study.core import cache
+from study.core import cache, datadir
 from study.core.errors import ConfigError, DataError
 from study.core.progress import Progress
 from study.runs.presets import preset
@@ -173,7 +173,7 @@ def render_set(
     return videos
 
 
-def book_set(preset_name: str, fps: float, duration: float, render_seed: int = 1000, data_dir: str | Path = "data",
+def book_set(preset_name: str, fps: float, duration: float, render_seed: int = 1000, data_dir: str | Path | None = None,
              progress: bool = False) -> tuple[list[Video], render.RenderConfig]:
     """The rendered throws the book uses (the real-world chapter's, which the cue chapter measures the
     tracker on): the preset's ``videos_per_class`` of each class at 320 x 240, ``fps``, ``duration``
@@ -182,5 +182,5 @@ def book_set(preset_name: str, fps: float, duration: float, render_seed: int = 1
     rcfg = render.RenderConfig(width=320, height=240, fps=fps, duration=duration, blur_subframes=2, noise_std=2.0,
                                jpeg_quality=85, shadows=p.render_shadows, seed=render_seed)
     cfg = synth.SynthConfig.preset(preset_name)
-    videos = render_set(cfg, p.videos_per_class, render_seed, Path(data_dir) / "realworld", rcfg, progress=progress)
+    videos = render_set(cfg, p.videos_per_class, render_seed, datadir.resolve(data_dir) / "realworld", rcfg, progress=progress)
     return videos, rcfg

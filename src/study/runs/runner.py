@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
-from study.core import ticket
+from study.core import datadir, ticket
 from study.learn import train
 from study.learn.config import Cell, Dims, Inputs, TrainConfig
 from study.runs import paper, records, schedule
@@ -61,12 +61,12 @@ class Runner:
     _memo: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     @classmethod
-    def open(cls, preset_name: str, data_seed: int = 0, data_dir: str | Path = "data", *, workers: int = 0,
+    def open(cls, preset_name: str, data_seed: int = 0, data_dir: str | Path | None = None, *, workers: int = 0,
              scheduler: str = "", progress: bool = False, render_seed: int = 1000, device: str | None = None) -> Runner:
         """The runner of preset ``preset_name`` on its dataset of ``data_seed`` (simulated once, then cached); its
         runs train on ``device`` (None: the device ``study book --device`` names in the chapter's ticket, else the
-        CPU)."""
-        folder = Path(data_dir).resolve()
+        CPU); its caches live in ``data_dir`` (None: ``study.core.datadir.resolve``'s, by default ``data/``)."""
+        folder = datadir.resolve(data_dir).resolve()
         ds = synth.dataset(preset_name, seed=data_seed, data_dir=folder, progress=progress)
         return cls(ds, preset(preset_name), folder, workers, progress, scheduler, render_seed,
                    device or ticket.current().device or "cpu")

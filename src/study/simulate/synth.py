@@ -22,7 +22,7 @@ from types import ModuleType
 import numpy as np
 
 from study import __version__
-from study.core import cache
+from study.core import cache, datadir
 from study.core.errors import ConfigError
 from study.simulate import data
 from study.simulate.config import (  # noqa: F401  (re-exported: synth.SynthConfig and friends)
@@ -93,9 +93,10 @@ def generate(cfg: SynthConfig, seed: int = 0, *, threads: int | None = None, pro
     return data.Dataset(train=splits["train"], test=splits["test"], fps=cfg.fps, meta=meta)
 
 
-def default_path(cfg: SynthConfig, seed: int, data_dir: str | Path = "data") -> Path:
-    """Where :func:`dataset` keeps ``(cfg, seed)``: ``<data_dir>/synth-<key>.npz``."""
-    return Path(data_dir) / f"synth-{cache_key(cfg, seed)}.npz"
+def default_path(cfg: SynthConfig, seed: int, data_dir: str | Path | None = None) -> Path:
+    """Where :func:`dataset` keeps ``(cfg, seed)``: ``<data_dir>/synth-<key>.npz`` (None: the cache folder,
+    ``study.core.datadir``)."""
+    return datadir.resolve(data_dir) / f"synth-{cache_key(cfg, seed)}.npz"
 
 
 def load(path: str | Path) -> data.Dataset:
@@ -118,11 +119,12 @@ def dataset(
     cfg: SynthConfig | str,
     seed: int = 0,
     *,
-    data_dir: str | Path = "data",
+    data_dir: str | Path | None = None,
     threads: int | None = None,
     progress: bool = True,
 ) -> data.Dataset:
-    """The dataset ``(cfg, seed)``: read from ``data_dir`` if present and valid, else simulated and saved.
+    """The dataset ``(cfg, seed)``: read from ``data_dir`` (None: the cache folder, ``study.core.datadir``) if
+    present and valid, else simulated and saved.
 
     ``cfg`` may be a preset name. A cached file from other code or library versions has another key,
     so it is never mistaken for this one; a corrupt one is replaced.
@@ -145,7 +147,7 @@ def generate_to_file(
     seed: int = 0,
     *,
     out: str | Path | None = None,
-    data_dir: str | Path = "data",
+    data_dir: str | Path | None = None,
     threads: int | None = None,
     progress: bool = True,
 ) -> Path:
