@@ -1,0 +1,210 @@
+"""Which training recipe settles? Candidate recipes on the networks whose validation swings most, chosen on
+validation data only, then confirmed; the test accuracy is printed after the choice.
+
+For each candidate recipe (:data:`CANDIDATES`: today's constant rate with early stopping, the rate halved on
+plateaus, fixed cosine budgets with a warm-up, an exponential moving average of the weights, a larger batch at a
+scaled rate) and each screened network (:data:`SCREEN`: speed X, Y, Z and velocity Z, at the command line's
+defaults otherwise), over ``--seeds`` seeds on one data set (the preset's, data seed 0), it prints:
+
+- the validation accuracy of the kept weights (mean and range over seeds);
+- how much the validation accuracy still moves over the last 10 epochs run (max - min, mean over seeds): a recipe
+  *settles* when this is at most :data:`SETTLED` points on every screened network;
+- epochs run (mean) and process CPU seconds per run (the training processes' own time, not wall time);
+- each against today's recipe, measured in the same run (ratios).
+
+The choice (:func:`choose`): of the recipes that settle, those within :data:`NEAR` points of the best mean
+validation accuracy, the one with the fewest epochs. Only then are the test accuracies printed (mean and range
+over seeds), and, with ``--confirm``, the choice and today's recipe are trained on the other networks
+(:data:`CONFIRM`: positions Z, Table 1's; positions X, Y, Z; the every-frame Z network of the decision chapter)
+with ``--confirm-seeds`` seeds. Every run is cached in ``--data-dir`` like the book's (``study.runs.records``), so a
+second invocation prints at once.
+
+    python benchmarks/bench_recipe.py                         # smoke: a minute, nothing to conclude from
+    python benchmarks/bench_recipe.py --preset paper --seeds 5 --confirm    # the real question (hours on 2 cores)
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import resource
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from study.learn.config import TrainConfig
+from study.runs import schedule
+from study.simulate import synth
+
+CANDIDATES: dict[str, dict[str, Any]] = {
+    "constant (today)": {},
+    "plateau": {"lr_schedule": "plateau"},
+    "constant + EMA": {"average": "ema"},
+    "cosine 60, 3e-3, warm-up 3": {"lr_schedule": "cosine", "max_epochs": 60, "lr": 3e-3, "warmup_epochs": 3},
+    "cosine 60, 3e-3, warm-up 3, EMA": {"lr_schedule": "cosine", "max_epochs": 60, "lr": 3e-3, "warmup_epochs": 3,
+                                        "average": "ema"},
+    "cosine 100, 1e-3": {"lr_schedule": "cosine", "max_epochs": 100},
+    "cosine 100, 1e-3, EMA": {"lr_schedule": "cosine", "max_epochs": 100, "average": "ema"},
+    "batch 128, 4e-3, cosine 60, warm-up 3": {"lr_schedule": "cosine", "max_epochs": 60, "lr": 4e-3,
+                                              "warmup_epochs": 3, "batch_size": 128},
+}
+"""Recipe name -> the TrainConfig fields it changes from today's defaults."""
+BASELINE = "constant (today)"
+"""The recipe the others are measured against."""
+SCREEN: dict[str, dict[str, Any]] = {"speed X, Y, Z": {"dims": "xyz", "inputs": "speed"},
+                                     "velocity Z": {"dims": "z", "inputs": "velocity"}}
+"""The networks whose validation loss swings most with a constant rate (issue 'Numbers that hold still')."""
+CONFIRM: dict[str, dict[str, Any]] = {"positions Z": {"dims": "z"}, "positions X, Y, Z": {"dims": "xyz"},
+                                      "every frame, velocity Z": {"dims": "z", "inputs": "velocity", "loss_at": "every"}}
+"""The networks the choice is confirmed on (the decision chapter's answers at every frame)."""
+SETTLED = 2.0
+"""Points: the most the validation accuracy may move over the last 10 epochs for a recipe to count as settled."""
+NEAR = 0.5
+"""Points: recipes this close to the best settled validation accuracy count as equally good; the cheapest wins."""
+LAST = 10
+"""Epochs at the end of a run over which settling is measured."""
+SMOKE_EPOCHS = 4
+"""On the smoke preset every budget is cut to this (the smoke data set cannot tell recipes apart)."""
+
+
+@dataclass(frozen=True)
+class Row:
+    """One recipe on one network, over the seeds."""
+
+    recipe: str
+    network: str
+    val: list[float]
+    """Validation accuracy of the kept weights, per seed."""
+    swing: list[float]
+    """Max - min validation accuracy over the last :data:`LAST` epochs run, per seed."""
+    epochs: list[int]
+    test: list[float]
+    failed: int
+    cpu: float
+    """Process CPU seconds per run (training processes), or the records' training seconds where all were cached."""
+
+
+def config(recipe: dict[str, Any], network: dict[str, Any], seed: int, smoke: bool) -> TrainConfig:
+    """Today's defaults with the network's and the recipe's changes (budgets cut on the smoke preset)."""
+    cfg = dataclasses.replace(TrainConfig(), seed=seed, **network, **recipe)
+    if smoke:
+        warm = min(cfg.warmup_epochs, 1)
+        cfg = dataclasses.replace(cfg, length=1.0, truncation=10, max_epochs=SMOKE_EPOCHS, min_epochs=2, patience=2,
+                                  warmup_epochs=warm)
+    cfg.check()
+    return cfg
+
+
+def children_cpu() -> float:
+    """CPU seconds of this process and its finished children (the training processes)."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def measure(ds, recipe: str, network: str, changes: dict[str, Any], seeds: Sequence[int], data_dir: Path,
+            workers: int, smoke: bool) -> Row:
+    """Train (or read) ``recipe`` on ``network`` for each seed; its row."""
+    cfgs = [config(CANDIDATES[recipe], changes, s, smoke) for s in seeds]
+    cached = sum(schedule.cached(ds, c, data_dir, True) is not None for c in cfgs)
+    t0 = children_cpu()
+    recs = schedule.run_all(ds, cfgs, data_dir, True, desc=f"{recipe} / {network}", progress=True, workers=workers)
+    cpu = (children_cpu() - t0) / len(cfgs) if cached < len(cfgs) else float(np.mean([r["train_seconds"]
+                                                                                         for r in recs]))
+    swing = []
+    for r in recs:
+        acc = [h["val_accuracy"] for h in r["history"][-LAST:] if np.isfinite(h["val_accuracy"])]
+        swing.append(100 * (max(acc) - min(acc)) if acc else float("nan"))
+    return Row(recipe, network, [100 * r["val_accuracy"] for r in recs], swing, [r["epochs_run"] for r in recs],
+               [100 * r["test"]["accuracy"] for r in recs], sum(bool(r["failed"]) for r in recs), cpu)
+
+
+def choose(rows: Sequence[Row]) -> tuple[str, dict[str, str]]:
+    """The chosen recipe on validation data alone (see the module's docstring), and why each other was not."""
+    recipes = list(dict.fromkeys(r.recipe for r in rows))
+    of = {name: [r for r in rows if r.recipe == name] for name in recipes}
+    settled = [n for n in recipes if all(np.mean(r.swing) <= SETTLED and not r.failed for r in of[n])]
+    why = {n: "does not settle" for n in recipes if n not in settled}
+    if not settled:
+        return BASELINE, why | {BASELINE: "none settles: today's stays"}
+    val = {n: float(np.mean([np.mean(r.val) for r in of[n]])) for n in settled}
+    best = max(val.values())
+    near = [n for n in settled if val[n] >= best - NEAR]
+    epochs = {n: float(np.mean([np.mean(r.epochs) for r in of[n]])) for n in near}
+    chosen = min(near, key=lambda n: (epochs[n], -val[n]))
+    why |= {n: f"settles, {best - val[n]:.1f} points below the best" for n in settled if n not in near}
+    why |= {n: f"as good, {epochs[n]:.0f} epochs against {epochs[chosen]:.0f}" for n in near if n != chosen}
+    return chosen, why
+
+
+def _pm(values: Sequence[float]) -> str:
+    return f"{np.mean(values):5.1f} [{min(values):.1f}, {max(values):.1f}]"
+
+
+def print_validation(rows: Sequence[Row]) -> None:
+    base = {r.network: r for r in rows if r.recipe == BASELINE}
+    print(f"\n{'recipe':40} {'network':26} {'val % [range]':>20} {'last-10 swing':>13} {'epochs':>7} {'CPU s/run':>10}"
+          f" {'epochs x':>8} {'CPU x':>6} failed")
+    for r in rows:
+        b = base[r.network]
+        print(f"{r.recipe:40} {r.network:26} {_pm(r.val):>20} {np.mean(r.swing):13.1f} {np.mean(r.epochs):7.0f} "
+              f"{r.cpu:10.1f} {np.mean(r.epochs) / np.mean(b.epochs):8.2f} {r.cpu / b.cpu:6.2f} {r.failed}")
+
+
+def print_test(rows: Sequence[Row]) -> None:
+    print(f"\n{'recipe':40} {'network':26} {'test % [range over seeds]':>26}")
+    for r in rows:
+        print(f"{r.recipe:40} {r.network:26} {_pm(r.test):>26}")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--preset", choices=("smoke", "paper"), default="smoke", help="data set (default: smoke)")
+    p.add_argument("--seeds", type=int, default=2, help="seeds per recipe and network on the screen (default: 2)")
+    p.add_argument("--confirm", action="store_true", help="confirm the choice on the networks of CONFIRM")
+    p.add_argument("--confirm-seeds", type=int, default=3, help="seeds of the confirmation (default: 3)")
+    p.add_argument("--recipes", nargs="*", default=list(CANDIDATES), help="candidate names (default: all)")
+    p.add_argument("--data-dir", type=Path, default=Path("data"), help="cache folder (default: data)")
+    p.add_argument("--workers", type=int, default=0, help="training processes (default: one per CPU)")
+    p.add_argument("--json", type=Path, help="also write every row here")
+    a = p.parse_args(argv)
+    unknown = [n for n in a.recipes if n not in CANDIDATES]
+    if unknown or BASELINE not in a.recipes:
+        print(f"bench_recipe: unknown recipes {unknown}; the baseline {BASELINE!r} must be one", file=sys.stderr)
+        return 2
+    smoke = a.preset == "smoke"
+    ds = synth.dataset(a.preset, seed=0, data_dir=a.data_dir)
+    seeds = tuple(range(a.seeds))
+    t0 = time.perf_counter()
+    rows = [measure(ds, name, net, changes, seeds, a.data_dir, a.workers or None, smoke)
+            for name in a.recipes for net, changes in SCREEN.items()]
+    print(f"\n{a.preset} data set ({len(ds.train.y)} training throws), {len(seeds)} seeds, screened in "
+          f"{time.perf_counter() - t0:.0f} s wall; settled = last-{LAST}-epoch swing <= {SETTLED} points on every "
+          "network")
+    print_validation(rows)
+    chosen, why = choose(rows)
+    print(f"\nchosen on validation: {chosen}")
+    for name, reason in why.items():
+        print(f"  {name}: {reason}")
+    print_test(rows)
+    confirmed = []
+    if a.confirm:
+        c_seeds = tuple(range(a.confirm_seeds))
+        confirmed = [measure(ds, name, net, changes, c_seeds, a.data_dir, a.workers or None, smoke)
+                     for name in dict.fromkeys((BASELINE, chosen)) for net, changes in CONFIRM.items()]
+        print(f"\nconfirmation, {len(c_seeds)} seeds:")
+        print_validation(confirmed)
+        print_test(confirmed)
+    if a.json:
+        a.json.write_text(json.dumps({"preset": a.preset, "chosen": chosen, "why": why,
+                                      "rows": [dataclasses.asdict(r) for r in rows + confirmed]}, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
