@@ -1,0 +1,38 @@
+"""benchmarks/bench_recipe.py chooses a recipe on validation alone: of those that settle, the cheapest of the best."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_recipe.py"
+
+
+def _bench():
+    spec = importlib.util.spec_from_file_location("bench_recipe", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # its dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+def _row(b, recipe, val, swing, epochs, failed=0, test=50.0):
+    return [b.Row(recipe, net, [val] * 3, [swing] * 3, [epochs] * 3, [test] * 3, failed, 10.0) for net in b.SCREEN]
+
+
+def test_the_cheapest_of_the_settled_recipes_near_the_best_is_chosen():
+    b = _bench()
+    rows = (_row(b, b.BASELINE, 95.0, 30.0, 80) + _row(b, "plateau", 97.0, 1.5, 110)
+            + _row(b, "cosine 60, 3e-3, warm-up 3", 96.8, 1.0, 60) + _row(b, "cosine 100, 1e-3", 95.5, 0.5, 100)
+            + _row(b, "constant + EMA", 99.0, 0.5, 70, failed=1, test=99.9))
+    chosen, why = b.choose(rows)
+    assert chosen == "cosine 60, 3e-3, warm-up 3", "within 0.5 points of the best settled, and fewer epochs"
+    assert why[b.BASELINE] == "does not settle" and why["constant + EMA"] == "does not settle", "a failed seed"
+    assert why["plateau"].startswith("as good") and "below the best" in why["cosine 100, 1e-3"]
+
+
+def test_when_nothing_settles_todays_recipe_stays():
+    b = _bench()
+    chosen, why = b.choose(_row(b, b.BASELINE, 95.0, 30.0, 80) + _row(b, "plateau", 97.0, 5.0, 110))
+    assert chosen == b.BASELINE and "none settles" in why[b.BASELINE]
