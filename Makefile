@@ -6,6 +6,7 @@ BIN    := $(VENV)/bin
 PRESET ?= paper
 SCHEDULER ?=
 DEVICE ?= cpu
+BOOK_ARGS ?=
 export MUJOCO_GL ?= egl
 export PYTHONHASHSEED := 0
 
@@ -22,9 +23,9 @@ install: $(BIN)/.installed
 
 ## Execute every chapter with papermill (PRESET=paper by default) and build the HTML book in _build/html;
 ## SCHEDULER=local (or a Dask scheduler's address) trains the chapters' runs on a Dask cluster;
-## DEVICE=cuda (or auto) trains them on a GPU.
+## DEVICE=cuda (or auto) trains them on a GPU; BOOK_ARGS="--data-dir DIR" keeps the caches in DIR.
 book: $(BIN)/.installed
-	$(BIN)/study book --preset $(PRESET) $(if $(SCHEDULER),--scheduler $(SCHEDULER)) --device $(DEVICE)
+	$(BIN)/study book --preset $(PRESET) $(if $(SCHEDULER),--scheduler $(SCHEDULER)) --device $(DEVICE) $(BOOK_ARGS)
 
 ## Unit tests and smoke runs of the real entry points (smoke presets).
 ## Two test processes (pytest-xdist): the smoke book's serial stretches (chapters executing, the HTML build)

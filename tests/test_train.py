@@ -513,10 +513,11 @@ def test_a_cosine_budget_warms_up_then_falls_to_its_floor():
     assert rates[:4] == pytest.approx([5e-4, 1e-3, 1.5e-3, 2e-3]), "linear warm-up to the rate"
     assert rates[-1] == pytest.approx(1e-4) and all(a >= b for a, b in zip(rates[4:], rates[5:])), "down to 5 %"
     assert not cfg.stops_early and TrainConfig().stops_early and TrainConfig().lr_at(3) is None
+    short = TrainConfig(lr=1e-3, lr_schedule="cosine", warmup_epochs=5, max_epochs=3, lr_floor=0.1)
+    assert [short.lr_at(e) for e in range(3)] == pytest.approx([5e-4, 1e-3, 1e-4]), "a short budget warms up less"
 
 
-@pytest.mark.parametrize("changes, field", [({"lr_schedule": "cosine", "warmup_epochs": 150}, "warmup_epochs"),
-                                            ({"warmup_epochs": -1}, "warmup_epochs"), ({"lr_floor": 0.0}, "lr_floor"),
+@pytest.mark.parametrize("changes, field", [({"warmup_epochs": -1}, "warmup_epochs"), ({"lr_floor": 0.0}, "lr_floor"),
                                             ({"ema_decay": 1.0}, "ema_decay"), ({"average": "swa"}, "average")])
 def test_recipe_fields_out_of_range_name_themselves(changes, field):
     with pytest.raises(ConfigError, match=f"TrainConfig.{field}"):

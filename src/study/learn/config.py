@@ -90,7 +90,8 @@ class TrainConfig:
     ``patience`` epochs; or 'cosine': ``max_epochs`` epochs whatever happens (no early stopping), the rate rising
     linearly over ``warmup_epochs`` and then falling along a half cosine to ``lr_floor`` of itself."""
     warmup_epochs: int = 0
-    """With 'cosine': epochs of linear warm-up, the rate rising from ``lr / warmup_epochs`` to ``lr``."""
+    """With 'cosine': epochs of linear warm-up, the rate rising from ``lr / warmup_epochs`` to ``lr`` (at most
+    ``max_epochs - 1``: a short budget warms up for less)."""
     lr_floor: float = 0.01
     """With 'cosine': the last epoch's rate over ``lr``."""
     average: Average = "none"
@@ -161,9 +162,6 @@ class TrainConfig:
         check_range("TrainConfig.rotate (degrees)", self.rotate, 0.0, 180.0)
         if not isinstance(self.warmup_epochs, int) or isinstance(self.warmup_epochs, bool) or self.warmup_epochs < 0:
             raise ConfigError(f"TrainConfig.warmup_epochs = {self.warmup_epochs!r}; it must be a whole number >= 0")
-        if self.lr_schedule == "cosine" and self.warmup_epochs >= self.max_epochs:
-            raise ConfigError(f"TrainConfig.warmup_epochs = {self.warmup_epochs} leaves no epoch of the cosine budget "
-                              f"(max_epochs = {self.max_epochs}); use fewer warm-up epochs or more epochs")
         check_range("TrainConfig.lr_floor", self.lr_floor, 0, 1, lo_open=True)
         check_range("TrainConfig.ema_decay", self.ema_decay, 0, 1, lo_open=True, hi_open=True)
         if self.rotate and self.dims == "z":
@@ -180,10 +178,11 @@ class TrainConfig:
         ('constant', 'plateau')."""
         if self.lr_schedule != "cosine":
             return None
-        if epoch < self.warmup_epochs:
-            return self.lr * (epoch + 1) / self.warmup_epochs
-        span = max(1, self.max_epochs - self.warmup_epochs - 1)
-        progress = min(1.0, (epoch - self.warmup_epochs) / span)
+        warm = min(self.warmup_epochs, self.max_epochs - 1)
+        if epoch < warm:
+            return self.lr * (epoch + 1) / warm
+        span = self.max_epochs - warm - 1  # epochs after the first of the decay
+        progress = 1.0 if span <= 0 else min(1.0, (epoch - warm) / span)
         return self.lr * (self.lr_floor + (1 - self.lr_floor) * 0.5 * (1 + math.cos(math.pi * progress)))
 
     def n_frames(self, fps: float) -> int:
