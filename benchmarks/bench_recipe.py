@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import resource
 import sys
 import time
 from collections.abc import Sequence
@@ -87,7 +86,7 @@ class Row:
     test: list[float]
     failed: int
     cpu: float
-    """Process CPU seconds per run (training processes), or the records' training seconds where all were cached."""
+    """Process CPU seconds per run (its record's, ``cpu_seconds``)."""
 
 
 def config(recipe: dict[str, Any], network: dict[str, Any], seed: int, smoke: bool) -> TrainConfig:
@@ -101,27 +100,29 @@ def config(recipe: dict[str, Any], network: dict[str, Any], seed: int, smoke: bo
     return cfg
 
 
-def children_cpu() -> float:
-    """CPU seconds of this process and its finished children (the training processes)."""
-    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+def plan(recipes: Sequence[str], networks: dict[str, dict[str, Any]], seeds: Sequence[int],
+         smoke: bool) -> dict[tuple[str, str], list[TrainConfig]]:
+    """(recipe, network) -> its configs, one per seed."""
+    return {(name, net): [config(CANDIDATES[name], changes, s, smoke) for s in seeds]
+            for name in recipes for net, changes in networks.items()}
 
 
-def measure(ds, recipe: str, network: str, changes: dict[str, Any], seeds: Sequence[int], data_dir: Path,
-            workers: int, smoke: bool) -> Row:
-    """Train (or read) ``recipe`` on ``network`` for each seed; its row."""
-    cfgs = [config(CANDIDATES[recipe], changes, s, smoke) for s in seeds]
-    cached = sum(schedule.cached(ds, c, data_dir, True) is not None for c in cfgs)
-    t0 = children_cpu()
-    recs = schedule.run_all(ds, cfgs, data_dir, True, desc=f"{recipe} / {network}", progress=True, workers=workers)
-    cpu = (children_cpu() - t0) / len(cfgs) if cached < len(cfgs) else float(np.mean([r["train_seconds"]
-                                                                                         for r in recs]))
-    swing = []
-    for r in recs:
-        acc = [h["val_accuracy"] for h in r["history"][-LAST:] if np.isfinite(h["val_accuracy"])]
-        swing.append(100 * (max(acc) - min(acc)) if acc else float("nan"))
-    return Row(recipe, network, [100 * r["val_accuracy"] for r in recs], swing, [r["epochs_run"] for r in recs],
-               [100 * r["test"]["accuracy"] for r in recs], sum(bool(r["failed"]) for r in recs), cpu)
+def measure(ds, cfgs: dict[tuple[str, str], list[TrainConfig]], data_dir: Path, workers: int | None) -> list[Row]:
+    """Train (or read) every run of ``cfgs`` at once (every core busy to the end), then one row per
+    (recipe, network): validation, settling, epochs, process CPU seconds per run (the records' own)."""
+    jobs = [(ds, c, True) for group in cfgs.values() for c in group]
+    recs = iter(schedule.run_many(jobs, data_dir, desc="recipes", progress=True, workers=workers))
+    rows = []
+    for (recipe, network), group in cfgs.items():
+        rs = [next(recs) for _ in group]
+        swing = []
+        for r in rs:
+            acc = [h["val_accuracy"] for h in r["history"][-LAST:] if np.isfinite(h["val_accuracy"])]
+            swing.append(100 * (max(acc) - min(acc)) if acc else float("nan"))
+        cpu = float(np.mean([r.get("cpu_seconds", r["train_seconds"]) for r in rs]))
+        rows.append(Row(recipe, network, [100 * r["val_accuracy"] for r in rs], swing, [r["epochs_run"] for r in rs],
+                        [100 * r["test"]["accuracy"] for r in rs], sum(bool(r["failed"]) for r in rs), cpu))
+    return rows
 
 
 def choose(rows: Sequence[Row]) -> tuple[str, dict[str, str]]:
@@ -181,8 +182,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ds = synth.dataset(a.preset, seed=0, data_dir=a.data_dir)
     seeds = tuple(range(a.seeds))
     t0 = time.perf_counter()
-    rows = [measure(ds, name, net, changes, seeds, a.data_dir, a.workers or None, smoke)
-            for name in a.recipes for net, changes in SCREEN.items()]
+    rows = measure(ds, plan(a.recipes, SCREEN, seeds, smoke), a.data_dir, a.workers or None)
     print(f"\n{a.preset} data set ({len(ds.train.y)} training throws), {len(seeds)} seeds, screened in "
           f"{time.perf_counter() - t0:.0f} s wall; settled = last-{LAST}-epoch swing <= {SETTLED} points on every "
           "network")
@@ -195,8 +195,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     confirmed = []
     if a.confirm:
         c_seeds = tuple(range(a.confirm_seeds))
-        confirmed = [measure(ds, name, net, changes, c_seeds, a.data_dir, a.workers or None, smoke)
-                     for name in dict.fromkeys((BASELINE, chosen)) for net, changes in CONFIRM.items()]
+        confirmed = measure(ds, plan(list(dict.fromkeys((BASELINE, chosen))), CONFIRM, c_seeds, smoke), a.data_dir,
+                            a.workers or None)
         print(f"\nconfirmation, {len(c_seeds)} seeds:")
         print_validation(confirmed)
         print_test(confirmed)
