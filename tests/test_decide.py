@@ -11,6 +11,7 @@ from study.chapters import decision
 from study.core.errors import ConfigError
 from study.methods import calibration, camera, operating
 from study.methods.tracker import TrackerError
+from study.report.text import pct_ci
 from study.runs import Runner, paper
 
 
@@ -288,6 +289,10 @@ def test_a_certifiable_chapter_reports_its_operating_points_under_their_names(ce
     assert n.clear["exact"].median_s.unit == "s" and 0 < n.clear["exact"].median_s.value <= 1.2
     assert n.certified.points.value == 8 == len(certified.certified_points), "4 classifiers x 2 seeds"
     assert n.clear["observed"].share_by_end.source["stable"] is True
+    ens = certified.networks["observed"].ensemble
+    assert "decision.clear.observed.ensemble.share" in names and "decision.clear.observed.ensemble.miss" in names
+    assert n.clear["observed"].ensemble.share.value == ens.share_cleared.value and ens.miss.value <= 0.05
+    assert n.clear["observed"].headline is n.clear["observed"].ensemble.share, "the answer quotes the ensemble"
     f = tmp_path / "results.json"
     f.write_text(results.dumps(n.entries()))
     assert decision.Numbers.read(results.load(f)) == n, "the summary reads the tree back"
@@ -312,6 +317,11 @@ def test_seeds_that_split_are_said_to_split():
     assert not c.networks["observed"].stable and c.networks["exact"].stable
     assert c.stable_words.startswith("For the velocity network under the calibrated tracker some seeds' shares")
     assert "**no**: the seeds split" in c.clear_table.markdown()
+    assert "The seeds together, as one classifier" in c.stable_words
+    split = c.networks["observed"]
+    ens = split.ensemble.share_cleared.value
+    assert split.ensemble is not None and pct_ci(split.ensemble.share_cleared) in c.clear_table.markdown()
+    assert f"{100 * ens:.1f} %" in c.answer and "its seeds as one classifier" in c.answer
 
 
 def test_too_few_heavy_throws_certify_nothing_and_the_chapter_says_so(tmp_path):

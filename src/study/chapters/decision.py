@@ -186,6 +186,8 @@ class FrameClearing:
     """(T,) test accuracy after each frame, mean over seeds and throws."""
     per_seed: tuple[operating.Clearing, ...] | None
     """Each seed's clearing at certified thresholds; None: not certifiable."""
+    ensemble: operating.Clearing | None = None
+    """The seeds as one classifier, the mean of their probabilities, certified once; None: not certifiable."""
 
     @property
     def shares(self) -> list[Interval]:
@@ -210,8 +212,9 @@ def clearing_of(net: EveryFrame, y_test: np.ndarray, y_cert: np.ndarray, target:
     right = (net.test > 0.5) == (y == 1)[None, :, None]  # (S, n, T)
     per_seed = [operating.clearing(net.certify[s], y_cert, net.test[s], y, target) for s in range(len(net.test))]
     certifiable = all(c is not None for c in per_seed)
+    ensemble = operating.clearing(net.certify.mean(axis=0), y_cert, net.test.mean(axis=0), y, target)
     return FrameClearing(net.name, right.mean(axis=(0, 1)),
-                         tuple(per_seed) if certifiable else None)  # type: ignore[arg-type]
+                         tuple(per_seed) if certifiable else None, ensemble)  # type: ignore[arg-type]
 
 
 class Scorer(Protocol):
@@ -352,11 +355,13 @@ class CarDecision:
     @property
     def stable_words(self) -> str:
         unstable = [n.name for n in self.networks.values() if n.per_seed is not None and not n.stable]
+        ensemble = ("The seeds together, as one classifier (the mean of their probabilities, certified once), give the "
+                    "number a car would use whatever the seed (the table's last column).")
         if not unstable:
-            return "Every seed's share lies within every other seed's interval: the number is stable."
+            return "Every seed's share lies within every other seed's interval: the number is stable. " + ensemble
         return ("For " + " and ".join(unstable) + " some seeds' shares lie outside others' intervals (the training of "
-                "these networks splits into groups): the pooled number is not stable, and the table shows each seed "
-                "instead.")
+                "these networks splits into groups): the pooled number is not stable, and the table shows each seed. "
+                + ensemble)
 
     @property
     def certified_points(self) -> list[tuple[str, int, Interval]]:
@@ -390,10 +395,11 @@ class CarDecision:
         text = (f"At the threshold certified for a {self.target} miss rate, Table 1's network on exact positions calls "
                 f"{fmt(exact.miss)} of the heavy test throws light and {fmt(exact.false_alarm)} of the "
                 "light ones heavy (seed 0)")
-        share = self.numbers.clear["observed"].share_by_end
-        if share is not None:
-            text += (f"; answering at every frame through the tracker, the camera's network clears "
-                     f"{fmt(share)} of the light objects within {self.input_seconds:g} s")
+        clear = self.numbers.clear["observed"]
+        if clear.headline is not None:
+            whose = "its seeds as one classifier" if clear.ensemble is not None else "pooled over its seeds"
+            text += (f"; answering at every frame through the tracker, the camera's network ({whose}) clears "
+                     f"{fmt(clear.headline)} of the light objects within {self.input_seconds:g} s")
         return text + "."
 
 
@@ -473,7 +479,11 @@ def _clear_numbers(fc: FrameClearing, seeds: tuple[int, ...], seconds: float, fp
         {str(s): SeedClearing(number(c.share_cleared, f"the same, seed {s}"),
                               number(c.miss, f"heavy test throws ever cleared, seed {s} (target {target:.0%})"))
          for s, c in zip(seeds, fc.per_seed)},
-        number(median, f"median time to clear the light objects cleared, {fc.name}", unit="s"))
+        number(median, f"median time to clear the light objects cleared, {fc.name}", unit="s"),
+        None if fc.ensemble is None else SeedClearing(
+            number(fc.ensemble.share_cleared, f"light objects cleared within {seconds:g} s by the seeds' ensemble (the "
+                   f"mean of their probabilities, certified once), {fc.name}", seeds=list(seeds)),
+            number(fc.ensemble.miss, f"heavy test throws ever cleared by the ensemble (target {target:.0%})")))
 
 
 def _condition_numbers(c: Condition, target: float) -> ConditionNumbers:
@@ -494,16 +504,18 @@ def _clear_table(networks: dict[NetworkKey, FrameClearing], seconds: float, targ
     for fc in networks.values():
         if fc.per_seed is None:
             rows.append({"network": fc.name, "share": "not certifiable", "seeds": "—", "miss": "—",
-                         "stable": "—"})
+                         "stable": "—", "ensemble": "—"})
             continue
         rows.append({"network": fc.name, "share": pct_ci(fc.pooled()),
                      "seeds": ", ".join(f"{100 * s.value:.1f}" for s in fc.shares),
                      "miss": ", ".join(f"{100 * c.miss.value:.1f}" for c in fc.per_seed),
-                     "stable": "yes" if fc.stable else "**no**: the seeds split"})
+                     "stable": "yes" if fc.stable else "**no**: the seeds split",
+                     "ensemble": "—" if fc.ensemble is None else pct_ci(fc.ensemble.share_cleared)})
     return Table(rows, {"network": "answers at every frame",
                         "share": f"light objects cleared within {seconds:g} s [95 % CI]", "seeds": "each seed (%)",
                         "miss": f"heavy test throws ever cleared, each seed (%; target {target:.0%})",
-                        "stable": "do the seeds agree?"})
+                        "stable": "do the seeds agree?",
+                        "ensemble": "the seeds' ensemble (mean probability, certified once)"})
 
 
 def _decision_table(conditions: dict[ConditionKey, Condition], target: float) -> Table:

@@ -48,6 +48,14 @@ class ClearNumbers(Reported):
     """Each seed's (keys: the seeds)."""
     median_s: Number | None = None
     """Median time to clear the light objects cleared, seconds."""
+    ensemble: SeedClearing | None = None
+    """The seeds as one classifier (the mean of their probabilities, certified once): what holds whatever the seed."""
+
+    @property
+    def headline(self) -> Number | None:
+        """The share of light objects cleared that the chapter's answer quotes: the ensemble's, which does not hang
+        on a seed, where it could be certified; else the seeds' pooled share."""
+        return self.ensemble.share if self.ensemble is not None else self.share_by_end
 
 
 @dataclass(frozen=True)
