@@ -64,6 +64,9 @@ CONFIRM: dict[str, dict[str, Any]] = {"positions Z": {"dims": "z"}, "positions X
 """The networks the choice is confirmed on (the decision chapter's answers at every frame)."""
 SETTLED = 2.0
 """Points: the most the validation accuracy may move over the last 10 epochs for a recipe to count as settled."""
+CLIMB = 1.0
+"""Points: the most the validation accuracy may still rise from the 10 epochs before the last 10 to the last 10
+(means) for a recipe to count as settled: a smooth curve that still climbs has not flattened."""
 NEAR = 0.5
 """Points: recipes this close to the best settled validation accuracy count as equally good; the cheapest wins."""
 LAST = 10
@@ -82,6 +85,8 @@ class Row:
     """Validation accuracy of the kept weights, per seed."""
     swing: list[float]
     """Max - min validation accuracy over the last :data:`LAST` epochs run, per seed."""
+    climb: list[float]
+    """Mean validation accuracy of the last :data:`LAST` epochs minus that of the :data:`LAST` before, per seed."""
     epochs: list[int]
     test: list[float]
     failed: int
@@ -115,12 +120,15 @@ def measure(ds, cfgs: dict[tuple[str, str], list[TrainConfig]], data_dir: Path, 
     rows = []
     for (recipe, network), group in cfgs.items():
         rs = [next(recs) for _ in group]
-        swing = []
+        swing, climb = [], []
         for r in rs:
-            acc = [h["val_accuracy"] for h in r["history"][-LAST:] if np.isfinite(h["val_accuracy"])]
-            swing.append(100 * (max(acc) - min(acc)) if acc else float("nan"))
+            acc = [h["val_accuracy"] for h in r["history"] if np.isfinite(h["val_accuracy"])]
+            last, before = acc[-LAST:], acc[-2 * LAST:-LAST]
+            swing.append(100 * (max(last) - min(last)) if last else float("nan"))
+            climb.append(100 * (np.mean(last) - np.mean(before)) if last and before else 0.0)
         cpu = float(np.mean([r.get("cpu_seconds", r["train_seconds"]) for r in rs]))
-        rows.append(Row(recipe, network, [100 * r["val_accuracy"] for r in rs], swing, [r["epochs_run"] for r in rs],
+        rows.append(Row(recipe, network, [100 * r["val_accuracy"] for r in rs], swing, climb,
+                        [r["epochs_run"] for r in rs],
                         [100 * r["test"]["accuracy"] for r in rs], sum(bool(r["failed"]) for r in rs), cpu))
     return rows
 
@@ -129,8 +137,10 @@ def choose(rows: Sequence[Row]) -> tuple[str, dict[str, str]]:
     """The chosen recipe on validation data alone (see the module's docstring), and why each other was not."""
     recipes = list(dict.fromkeys(r.recipe for r in rows))
     of = {name: [r for r in rows if r.recipe == name] for name in recipes}
-    settled = [n for n in recipes if all(np.mean(r.swing) <= SETTLED and not r.failed for r in of[n])]
-    why = {n: "does not settle" for n in recipes if n not in settled}
+    settled = [n for n in recipes if all(np.mean(r.swing) <= SETTLED and np.mean(r.climb) <= CLIMB and not r.failed
+                                         for r in of[n])]
+    why = {n: "does not settle" if any(np.mean(r.swing) > SETTLED or r.failed for r in of[n])
+           else "still climbing" for n in recipes if n not in settled}
     if not settled:
         return BASELINE, why | {BASELINE: "none settles: today's stays"}
     val = {n: float(np.mean([np.mean(r.val) for r in of[n]])) for n in settled}
@@ -149,11 +159,12 @@ def _pm(values: Sequence[float]) -> str:
 
 def print_validation(rows: Sequence[Row]) -> None:
     base = {r.network: r for r in rows if r.recipe == BASELINE}
-    print(f"\n{'recipe':40} {'network':26} {'val % [range]':>20} {'last-10 swing':>13} {'epochs':>7} {'CPU s/run':>10}"
-          f" {'epochs x':>8} {'CPU x':>6} failed")
+    print(f"\n{'recipe':40} {'network':26} {'val % [range]':>20} {'last-10 swing':>13} {'climb':>6} {'epochs':>7} "
+          f"{'CPU s/run':>10} {'epochs x':>8} {'CPU x':>6} failed")
     for r in rows:
         b = base[r.network]
-        print(f"{r.recipe:40} {r.network:26} {_pm(r.val):>20} {np.mean(r.swing):13.1f} {np.mean(r.epochs):7.0f} "
+        print(f"{r.recipe:40} {r.network:26} {_pm(r.val):>20} {np.mean(r.swing):13.1f} {np.mean(r.climb):6.1f} "
+              f"{np.mean(r.epochs):7.0f} "
               f"{r.cpu:10.1f} {np.mean(r.epochs) / np.mean(b.epochs):8.2f} {r.cpu / b.cpu:6.2f} {r.failed}")
 
 
@@ -184,8 +195,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     t0 = time.perf_counter()
     rows = measure(ds, plan(a.recipes, SCREEN, seeds, smoke), a.data_dir, a.workers or None)
     print(f"\n{a.preset} data set ({len(ds.train.y)} training throws), {len(seeds)} seeds, screened in "
-          f"{time.perf_counter() - t0:.0f} s wall; settled = last-{LAST}-epoch swing <= {SETTLED} points on every "
-          "network")
+          f"{time.perf_counter() - t0:.0f} s wall; settled = on every network, a last-{LAST}-epoch swing <= {SETTLED} "
+          f"points and a climb <= {CLIMB} point from the {LAST} epochs before")
     print_validation(rows)
     chosen, why = choose(rows)
     print(f"\nchosen on validation: {chosen}")

@@ -17,19 +17,22 @@ def _bench():
     return module
 
 
-def _row(b, recipe, val, swing, epochs, failed=0, test=50.0):
-    return [b.Row(recipe, net, [val] * 3, [swing] * 3, [epochs] * 3, [test] * 3, failed, 10.0) for net in b.SCREEN]
+def _row(b, recipe, val, swing, epochs, failed=0, test=50.0, climb=0.0):
+    return [b.Row(recipe, net, [val] * 3, [swing] * 3, [climb] * 3, [epochs] * 3, [test] * 3, failed, 10.0)
+            for net in b.SCREEN]
 
 
 def test_the_cheapest_of_the_settled_recipes_near_the_best_is_chosen():
     b = _bench()
     rows = (_row(b, b.BASELINE, 95.0, 30.0, 80) + _row(b, "plateau", 97.0, 1.5, 110)
             + _row(b, "cosine 60, 3e-3, warm-up 3", 96.8, 1.0, 60) + _row(b, "cosine 100, 1e-3", 95.5, 0.5, 100)
-            + _row(b, "constant + EMA", 99.0, 0.5, 70, failed=1, test=99.9))
+            + _row(b, "constant + EMA", 99.0, 0.5, 70, failed=1, test=99.9)
+            + _row(b, "cosine 100, 1e-3, EMA", 99.5, 0.3, 100, climb=2.5))
     chosen, why = b.choose(rows)
     assert chosen == "cosine 60, 3e-3, warm-up 3", "within 0.5 points of the best settled, and fewer epochs"
     assert why[b.BASELINE] == "does not settle" and why["constant + EMA"] == "does not settle", "a failed seed"
     assert why["plateau"].startswith("as good") and "below the best" in why["cosine 100, 1e-3"]
+    assert why["cosine 100, 1e-3, EMA"] == "still climbing", "smooth is not flat: its curve still rises"
 
 
 def test_when_nothing_settles_todays_recipe_stays():
