@@ -3,7 +3,8 @@
 ``study results A --compare B`` asks whether numbers moved outside each other's intervals; this asks whether
 they are *identical*, as they must be after a change that only moves code (a refactor changes every cache
 key, so the runs are trained again and must come out the same bit for bit). For two project roots that
-each hold a built book (``_build/results.json``) and its caches (``data/``):
+each hold a built book (``_build/results.json``) and its caches (``data/``, or the folders ``--data`` names for
+builds made with ``study book --data-dir``):
 
 - every number and verdict present in either results file (of either format; the first format's names read
   under today's, ``study.book.results.RENAMED``): value, interval, method, unit, paper value, verdict, the
@@ -14,7 +15,7 @@ each hold a built book (``_build/results.json``) and its caches (``data/``):
   file of its own, the same config and test split size): equal in everything but its key, its dataset key and
   its training time.
 
-    python scripts/compare_builds.py /path/to/before /path/to/after
+    python scripts/compare_builds.py /path/to/before /path/to/after [--data BEFORE_CACHE AFTER_CACHE]
 
 Exit status 0 when everything compared is identical, 1 otherwise.
 """
@@ -55,9 +56,9 @@ def dataset_identity(data_dir: Path, key: str) -> str | None:
     return None
 
 
-def records(root: Path) -> dict[str, list[dict]]:
-    """Every run record of ``root/data/runs``, grouped by what run it is (see the module docstring)."""
-    data_dir = root / "data"
+def records(data_dir: Path) -> dict[str, list[dict]]:
+    """Every run record of ``data_dir/runs`` (a build's cache folder), grouped by what run it is (see the module
+    docstring)."""
     identities: dict[str, str | None] = {}
     out: dict[str, list[dict]] = defaultdict(list)
     for f in sorted((data_dir / "runs").glob("*.json")):
@@ -104,7 +105,7 @@ def compare_results(a: Path, b: Path) -> tuple[int, int, list[str]]:
 
 
 def compare_records(a: Path, b: Path) -> tuple[int, int, list[str]]:
-    """(records compared, records that differ or have no counterpart, messages)."""
+    """(records compared, records that differ or have no counterpart, messages) of two cache folders."""
     A, B = records(a), records(b)
     msgs, compared, differ = [], 0, 0
     strip = lambda r, *more: _canon({k: v for k, v in r.items() if k not in RECORD_SKIP + more})  # noqa: E731
@@ -131,9 +132,12 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("first", type=Path, help="a project root with _build/results.json and data/")
     ap.add_argument("second", type=Path, help="another")
+    ap.add_argument("--data", type=Path, nargs=2, metavar=("FIRST_DATA", "SECOND_DATA"),
+                    help="the two builds' cache folders, where they were built with --data-dir (default: each root's data/)")
     a = ap.parse_args(argv)
     n_num, d_num, m_num = compare_results(a.first / "_build" / "results.json", a.second / "_build" / "results.json")
-    n_rec, d_rec, m_rec = compare_records(a.first, a.second)
+    first_data, second_data = a.data or (a.first / "data", a.second / "data")
+    n_rec, d_rec, m_rec = compare_records(first_data, second_data)
     for m in m_num + m_rec:
         print(m)
     print(f"numbers: {n_num} compared (timings aside), {d_num} differ; "

@@ -3,11 +3,13 @@ number that moved (or a verdict that changed) after the second format renamed th
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import json
 from pathlib import Path
 
 from study.book import results
+from study.learn.config import TrainConfig
 from study.learn.metrics import Interval
 from study.report import reported, verdicts
 
@@ -75,3 +77,19 @@ def test_a_data_sets_key_in_a_source_is_not_compared_but_any_other_source_field_
     build(tmp_path / "c", data="74bece103e0c5818", seeds=[0, 2])
     assert _script().main([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
     assert _script().main([str(tmp_path / "a"), str(tmp_path / "c")]) == 1
+
+
+def test_builds_whose_caches_live_elsewhere_are_compared_run_by_run(tmp_path, capsys):
+    """``--data A B``: the cache folders of builds made with ``study book --data-dir``."""
+    _new_build(tmp_path / "a")
+    _new_build(tmp_path / "b")
+    (tmp_path / "cache-a" / "runs").mkdir(parents=True)
+    (tmp_path / "cache-b" / "runs").mkdir(parents=True)
+    record = {"key": "k1", "data_key": "d", "config": dataclasses.asdict(TrainConfig()), "test": None,
+              "val_accuracy": 0.9}
+    (tmp_path / "cache-a" / "runs" / "k1.json").write_text(json.dumps(record))
+    args = [str(tmp_path / "a"), str(tmp_path / "b"), "--data", str(tmp_path / "cache-a"), str(tmp_path / "cache-b")]
+    assert _script().main(args) == 1, "a run in one cache and not the other"
+    assert "1 differ or have no counterpart" in capsys.readouterr().err
+    (tmp_path / "cache-b" / "runs" / "k2.json").write_text(json.dumps({**record, "key": "k2"}))
+    assert _script().main(args) == 0, "the same run under another key"
