@@ -16,7 +16,7 @@ from study.book.publish import glued
 from study.chapters import cues
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
-from study.methods import calibration
+from study.methods import calibration, windows
 from study.methods.tracker import Decomposition, TrackerError
 from study.methods.tracker_model import TrackerFit
 from study.runs import Runner, paper, records
@@ -49,7 +49,7 @@ def drag_only(n: int, seed: int, fps: float = 30.0, frames: int = 60) -> data.Sp
 
 def test_window_cues_finds_the_drag_cue_before_any_landing():
     ds = data.Dataset(train=drag_only(200, 0), test=drag_only(200, 1), fps=30.0)
-    short, long = cues.window_cues(ds, (0.3, 2.0), contact_height=0.15)
+    short, long = windows.window_cues(ds, (0.3, 2.0), contact_height=0.15)
     assert short["length"] == 0.3 and short["landed"] == 0.0  # nothing reaches the ground in 9 frames
     assert long["landed"] == 1.0
     assert short["drag"].value > 0.9 and short["drag"].lo <= short["drag"].value <= short["drag"].hi

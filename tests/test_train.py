@@ -12,9 +12,8 @@ import torch
 from study import cli
 from study.core.errors import ConfigError, ModelError, TrajectoryError
 from study.core.fielddoc import field_docs
-from study.learn.config import TrainConfig
 from study.learn import train
-from study.learn.config import CELLS, OLD_MEANING
+from study.learn.config import CELLS, OLD_MEANING, TrainConfig
 from study.simulate import data
 
 TINY = train.TrainConfig(dims="xyz", length=0.5, hidden=8, max_epochs=2, batch_size=8, truncation=5, patience=2)

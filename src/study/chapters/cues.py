@@ -39,7 +39,7 @@ from study.methods import calibration
 from study.methods.ceiling import exact_ceiling
 from study.methods.tracker import LABELS, Decomposition, TrackerError
 from study.methods.tracker_model import TrackerFit
-from study.methods.windows import DRAG, rules, window_cues  # noqa: F401  (the chapter's rules)
+from study.methods.windows import DRAG, rules
 from study.report import verdicts
 from study.report.cues import (
     GROUPS,

@@ -1,8 +1,7 @@
 """Learners: the ways the study tells light from heavy, each fitted on a training split and scored on test splits
 through one interface, so the chapters that compare them (motion, engine, baselines) score them alike.
 
-A :class:`Learner` has a name, the training runs it needs (:meth:`Learner.configs`; none for a learner fitted on the
-spot) and :meth:`Learner.score`: which test throws it gets right, on each of several test inputs (the exact and the
+A :class:`Learner` has a name and :meth:`Learner.score`: which test throws it gets right, on each of several test inputs (the exact and the
 observed test split, or each engine's). The implementations:
 
 - :class:`Network`: a recurrent network's runs over seeds, trained (or read) by the runner;
@@ -67,9 +66,6 @@ class Learner(Protocol):
 
     name: str
 
-    def configs(self) -> list[TrainConfig]:
-        """The training runs it needs (none for a learner fitted on the spot)."""
-
     def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
         """Fitted on ``runner``'s training split (``x_train``, (n, T, 3) metres, in place of its positions where
         given: an observed draw) and scored on each of ``tests``."""
@@ -86,9 +82,6 @@ class Network:
     dims: Dims = "z"
     desc: str = ""
     """What the progress bar says while its runs train."""
-
-    def configs(self) -> list[TrainConfig]:
-        return [dataclasses.replace(self.cfg, dims=self.dims, seed=s) for s in self.seeds]
 
     def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
         runs = runner.train_runs(self.cfg, (self.dims,), self.seeds, desc=self.desc or self.name)
@@ -108,9 +101,6 @@ class Rocket:
     seeds: tuple[int, ...]
     name: str = "minirocket"
 
-    def configs(self) -> list[TrainConfig]:
-        return []
-
     def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
         xs = {k: x for k, (x, _) in tests.items()}
         labels = [rocket_predictions(runner.dataset, self.dims, self.n_frames, s, xs, runner.data_dir, x_train)
@@ -127,9 +117,6 @@ class Physics:
     length: float
     """Input length, seconds."""
     name: str = "physics"
-
-    def configs(self) -> list[TrainConfig]:
-        return []
 
     def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
         ds = runner.dataset
@@ -149,9 +136,6 @@ class Rule:
     """The shape's bounding radius, metres (where the first fall ends)."""
     height_only: bool = True
     name: str = "rule"
-
-    def configs(self) -> list[TrainConfig]:
-        return []
 
     def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
         ds = runner.dataset
