@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from study.runs import paper, preset, records
+from study.runs import cluster, paper, preset, schedule
 from study.simulate import synth
 
 
@@ -28,7 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=0, help="processes / Dask workers (0: one per CPU)")
     ap.add_argument("--epochs", type=int, default=10, help="epochs per run (the smoke preset's 3 are mostly start-up)")
     a = ap.parse_args(argv)
-    workers = a.workers or schedule.default_workers()
+    workers = a.workers or cluster.default_workers()
     p = preset("smoke")
     with tempfile.TemporaryDirectory() as tmp:
         ds = synth.dataset("smoke", seed=0, data_dir=Path(tmp) / "data", progress=False)

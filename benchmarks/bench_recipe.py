@@ -50,6 +50,8 @@ CANDIDATES: dict[str, dict[str, Any]] = {
                                         "average": "ema"},
     "cosine 100, 1e-3": {"lr_schedule": "cosine", "max_epochs": 100},
     "cosine 100, 1e-3, EMA": {"lr_schedule": "cosine", "max_epochs": 100, "average": "ema"},
+    "constant + EMA 0.995": {"average": "ema", "ema_decay": 0.995},
+    "cosine 150, 1e-3": {"lr_schedule": "cosine", "max_epochs": 150},
     "batch 128, 4e-3, cosine 60, warm-up 3": {"lr_schedule": "cosine", "max_epochs": 60, "lr": 4e-3,
                                               "warmup_epochs": 3, "batch_size": 128},
 }

@@ -121,3 +121,26 @@ def test_the_readme_python_example_runs_as_written(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert (tmp_path / "my-model" / "weights.pt").is_file()
     assert (tmp_path / "data").is_dir()  # the example's cache went where it ran, not into the project
+
+
+def test_two_makers_of_one_cache_entry_make_it_once(tmp_path):
+    import threading
+    import time
+
+    from study.core.cache import one_maker, write_text_atomic
+
+    target, made = tmp_path / "entry.txt", []
+
+    def make(who: str) -> None:
+        with one_maker(target):
+            if not target.exists():
+                time.sleep(0.2)  # the other maker arrives while this one works
+                write_text_atomic(target, who)
+                made.append(who)
+
+    threads = [threading.Thread(target=make, args=(w,)) for w in ("a", "b")]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(made) == 1 and target.read_text() == made[0]

@@ -90,8 +90,12 @@ def test_the_plan_counts_distinct_models_and_sums_their_training_time(tmp_path, 
     assert plan.n_models == 5
     key = records.run_key(ds, dataclasses.replace(cfg, seed=9), True)
     records.record_path(tmp_path, key).parent.mkdir(parents=True)
-    records.record_path(tmp_path, key).write_text(json.dumps({"train_seconds": 2.5}))
-    assert cluster.plan_totals([tmp_path / "plan.jsonl", tmp_path / "absent.jsonl"]) == {"models": 5.0, "train_seconds": 2.5}
+    records.record_path(tmp_path, key).write_text(json.dumps({"train_seconds": 2.5, "epochs_run": 7}))
+    assert cluster.plan_totals([tmp_path / "plan.jsonl", tmp_path / "absent.jsonl"]) == {
+        "models": 5.0, "cpu_seconds": 2.5, "epochs": 7.0}
+    records.record_path(tmp_path, key).write_text(json.dumps({"train_seconds": 2.5, "cpu_seconds": 4.0,
+                                                              "epochs_run": 7}))
+    assert cluster.plan_totals([tmp_path / "plan.jsonl"])["cpu_seconds"] == 4.0  # process time where it was kept
 
 
 def _run(cfg: train.TrainConfig, val_accuracy: float = 0.7, accuracy: float | None = None, **kw) -> Run:
@@ -274,11 +278,14 @@ def test_the_recommended_model_is_the_best_candidate_on_observed_validation_thro
     cands = realworld.candidates(r, {"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}, ob)
     assert list(cands) == ["positions, exact", "positions, randomised", "velocity, exact", "velocity, randomised"]
     assert cands["velocity, randomised"].observe == "randomised" and cands["velocity, randomised"].observe_noise == 0.01
-    rec = realworld.recommended(r, cands, ob=ob)
+    rec = realworld.recommended(r, cands, seeds=(0, 1), ob=ob)
     choice, val, models = rec.choice, rec.val, rec.models
     assert set(val) == set(models) == set(cands) and choice == max(val, key=lambda k: val[k].value)
-    assert rec.model is models[choice] and models[choice].config == dataclasses.replace(cands[choice], seed=0)
-    assert r.plan.n_models == 4 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
+    assert rec.model is models[choice]
+    assert [m.config for m in models[choice].members] == [dataclasses.replace(cands[choice], seed=s) for s in (0, 1)]
+    assert r.plan.n_models == 8 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
+    with pytest.raises(ConfigError, match="seeds is empty"):
+        realworld.recommended(r, cands, seeds=(), ob=ob)
 
 
 def test_an_in_memory_dataset_is_saved_once_for_the_workers(tmp_path, ds):

@@ -105,3 +105,34 @@ def test_a_planned_build_stops_a_chapter_at_runs_not_trained_yet(smoke_dataset, 
     records.record_path(data, fake["key"]).parent.mkdir(parents=True)
     records.record_path(data, fake["key"]).write_text(json.dumps(fake))
     schedule.ask(jobs[:1], data)  # trained now: it passes
+
+
+def test_a_build_trainer_trains_each_run_once_whoever_asks(smoke_dataset, tmp_path):
+    """Two chapters asking for overlapping runs: each run is submitted once, the second asker waits on the first's
+    future; the records are the ones run_many makes; a cached run is not submitted at all."""
+    from concurrent.futures import wait
+
+    from study.core.errors import StudyError
+    from study.simulate import data as data_files
+
+    data = tmp_path / "data"
+    ds = dataclasses.replace(smoke_dataset, path=tmp_path / "smoke.npz")
+    data_files.save(ds, ds.path)
+    jobs = [(ds, SMOKE, True), (ds, dataclasses.replace(SMOKE, seed=1), False)]
+    keys = {records.run_key(d, c, t) for d, c, t in jobs}
+    with schedule.Trainer(data, workers=1) as trainer:
+        first = trainer.submit(jobs)
+        again = trainer.submit([jobs[1], jobs[1]])
+        assert len(first) == 2 and again == [trainer.futures[records.run_key(*jobs[1])]]
+        wait(first)
+        assert trainer.trained() == keys
+    made = [records.cached(d, c, data, t) for d, c, t in jobs]
+    assert all(made) and _strip(made) == _strip(schedule.run_many(jobs, tmp_path / "alone", workers=1))
+    with schedule.Trainer(data, workers=1) as trainer:
+        assert trainer.submit(jobs) == [] and not trainer.futures, "cached runs are not trained again"
+    with pytest.raises(StudyError, match="outside its 'with' block"):
+        trainer.submit(jobs)
+
+
+def _strip(recs: list) -> list:
+    return [{k: v for k, v in r.items() if k not in ("train_seconds", "cpu_seconds")} for r in recs]

@@ -532,3 +532,19 @@ def test_the_torch_lstm_trains_on_a_cosine_budget_and_keeps_its_average(smoke_da
     plain = train.fit(smoke_dataset, dataclasses.replace(cfg, average="none"), warn=False)
     kept = [p for p in tm.net.parameters()]
     assert any(not torch.equal(a, b) for a, b in zip(kept, plain.net.parameters())), "the average is what is kept"
+
+
+def test_an_ensemble_is_the_mean_of_its_members_probabilities(ds, tm):
+    from study.learn.trained import Ensemble
+
+    other = train.fit(ds, dataclasses.replace(TINY, seed=1), progress=False)
+    x = ds.test.x
+    both = Ensemble((tm, other))
+    assert (both.dims, both.n_frames, both.fps) == (tm.dims, tm.n_frames, tm.fps)
+    np.testing.assert_array_equal(both.predict_proba(x), (tm.predict_proba(x) + other.predict_proba(x)) / 2)
+    np.testing.assert_array_equal(Ensemble((tm,)).predict_proba(x), tm.predict_proba(x))
+    with pytest.raises(ConfigError, match="empty"):
+        Ensemble(())
+    z = train.fit(ds, dataclasses.replace(TINY, dims="z"), progress=False)
+    with pytest.raises(ConfigError, match="different inputs"):
+        Ensemble((tm, z))

@@ -25,6 +25,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Iterator
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -214,27 +215,35 @@ def inputs_fingerprint(root: Path, parameters: dict[str, Any]) -> dict[str, Any]
 # Execution
 
 
-@contextlib.contextmanager
-def _kernel_environment(ticket_file: Path | None = None) -> Iterator[None]:
-    """Environment the kernel inherits: headless MuJoCo, fixed hash seed, the inline matplotlib backend, this very
-    ``study``, and the chapter's ticket (``study.core.ticket``: where its progress, numbers and plan go, its
-    device, where it lists runs not trained yet), the one thing the builder tells a chapter."""
-    saved = dict(os.environ)
-    os.environ.setdefault("MUJOCO_GL", "egl")
-    os.environ["PYTHONHASHSEED"] = "0"
+def _kernel_environment(ticket_file: Path | None = None) -> dict[str, str]:
+    """Environment the kernel starts with (the builder's own is left alone: two chapters run at once): headless
+    MuJoCo, fixed hash seed, the inline matplotlib backend, this very ``study``, and the chapter's ticket
+    (``study.core.ticket``: where its progress, numbers and plan go, its device, where it lists runs not trained
+    yet), the one thing the builder tells a chapter."""
+    env = dict(os.environ)
+    env.setdefault("MUJOCO_GL", "egl")
+    env["PYTHONHASHSEED"] = "0"
     # Figures as images whatever the caller's MPLBACKEND (Agg, common on servers, would show them as text).
-    os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
+    env["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
     # The kernel must import the same package whose source the cache key hashed.
     src = str(Path(study.__file__).resolve().parent.parent)
-    path = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
-    os.environ["PYTHONPATH"] = os.pathsep.join([src, *[p for p in path if p != src]])
+    path = [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p]
+    env["PYTHONPATH"] = os.pathsep.join([src, *[p for p in path if p != src]])
     if ticket_file is not None:
-        os.environ[ticket.ENV] = str(ticket_file)
-    try:
-        yield
-    finally:
-        os.environ.clear()
-        os.environ.update(saved)
+        env[ticket.ENV] = str(ticket_file)
+    return env
+
+
+def _kernel_manager(env: dict[str, str]) -> type:
+    """A kernel manager class whose kernels start with ``env`` (papermill hands nbclient the class, not the
+    environment)."""
+    from jupyter_client.manager import AsyncKernelManager
+
+    class WithEnvironment(AsyncKernelManager):  # type: ignore[misc]
+        async def start_kernel(self, **kw: Any) -> None:  # type: ignore[override]
+            await super().start_kernel(**{"env": env, **kw})
+
+    return WithEnvironment
 
 
 _FENCE = re.compile(r"^(`{3,}|~{3,})\{code-cell\}")
@@ -310,7 +319,7 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
     ch.plan_part.unlink(missing_ok=True)
     ch.plan_part.parent.mkdir(parents=True, exist_ok=True)
     try:
-        with _kernel_environment(ticket_file), Follower(follow, ch.stem):
+        with Follower(follow, ch.stem):
             papermill.execute_notebook(
                 str(source_nb),
                 str(running),
@@ -322,6 +331,7 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
                 # The kernel's own log (not the cells' output) only warns that its local TCP link is
                 # unencrypted; errors still show.
                 extra_arguments=["--IPKernelApp.log_level=ERROR"],
+                kernel_manager_class=_kernel_manager(_kernel_environment(ticket_file)),
             )
     except PapermillExecutionError as e:
         if chapter_ticket.asked():  # it listed runs not trained yet: the build trains them, then runs it again
@@ -407,16 +417,16 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, keeping the others'
     current copies, but a chapter that has no executed copy at all is always executed.
 
-    **One plan for the build.** The chapters to execute run in rounds. In each, a chapter that asks for runs not
-    trained yet writes them down and stops (``study.runs.schedule.ask``); once every chapter has run or
-    stopped, the union of what they asked for is trained at once, in stacks, longest first, on every core
-    (``workers``, 0: one per CPU) or the Dask ``scheduler``, on ``device``, and the stopped chapters run again. A
-    round is a stage of the plan: the runs that depend on earlier results (Table 1's configuration is the grid's
-    winner) come in the stage after them. A chapter that completes has trained nothing itself. ``scheduler`` (a
+    **One plan for the build.** The chapters to execute run two at a time (:data:`AT_ONCE`). A chapter that asks
+    for runs not trained yet writes them down and stops (``study.runs.schedule.ask``); its runs go at once to one
+    pool of workers kept for the whole build (``workers``, 0: one per CPU; or the Dask ``scheduler``), on
+    ``device``, in stacks, and the chapter runs again once they are trained, while the others go on. The runs that
+    depend on earlier results (Table 1's configuration is the grid's winner) are asked for when it runs again. A chapter that completes has trained nothing itself. ``scheduler`` (a
     Dask scheduler's address) is also handed to every chapter with a ``scheduler`` parameter, outside its cache
     key; ``device`` is part of every chapter's key (the runs' keys name it). Stops at the first failing chapter with
-    :class:`ChapterError`. Writes ``_build/executed/timings.json`` (each chapter's last execution, each stage's
-    runs and seconds, the models the book's chapters train and their CPU time, :func:`plan_totals`) and merges the
+    :class:`ChapterError`. Writes ``_build/executed/timings.json`` (the build's wall and process CPU
+    seconds, each chapter's last execution, each wait for runs, the models the book's chapters train with their
+    epochs and CPU time, :func:`plan_totals`) and merges the
     chapters' numbers into ``_build/results.json`` (:mod:`study.book.results`): before the chapters that run last
     (:func:`_runs_last`, such as a summary that reads them) and again at the end.
     """
@@ -429,6 +439,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     if unknown:
         raise ConfigError(f"--only {', '.join(unknown)}: no such chapter; the chapters are: {', '.join(stems)}")
     injected = {"preset": preset}
+    started = time.perf_counter()
     package = source_hash(words=True)
     timings: dict[str, dict[str, Any]] = {}
     stages: list[dict[str, Any]] = []
@@ -475,11 +486,19 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         for ch, base, parameters, seconds in done:
             _write_key(ch, base, parameters, root, seconds)
         if timings:
-            record = {"preset": preset, "device": device, "chapters": timings, "stages": stages,
+            record = {"preset": preset, "device": device, "wall_seconds": round(time.perf_counter() - started, 3),
+                      "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages,
                       "runs": plan_totals(root)}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
             results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
+
+
+def _cpu_seconds() -> float:
+    """Process CPU time of this build: its own and that of its finished children (the kernels; the training
+    workers), user and system."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
 
 
 def cache_dir(root: Path, data_dir: Path | None = None) -> Path:
@@ -489,76 +508,92 @@ def cache_dir(root: Path, data_dir: Path | None = None) -> Path:
     return folder if folder.is_absolute() else (root / folder).resolve()
 
 
+AT_ONCE = 2
+"""Chapters executed at the same time (each in its own kernel): on two cores one chapter computes while another
+waits for its runs, and the runs train while the chapters that have not stopped go on."""
+
+
 def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter], todo: list, timings: dict,
                  stages: list, done: list, tmp: Path, scheduler: str, device: str, workers: int, data: Path) -> None:
-    """Execute the chapters of ``todo`` in rounds (see :func:`execute`), training each round's runs at once; the
-    chapters that run last wait until every other chapter is done."""
+    """Execute the chapters of ``todo`` (see :func:`execute`), :data:`AT_ONCE` at a time. A chapter that stops at
+    runs not trained yet hands them to one pool of workers kept for the whole build (``study.runs.schedule.Trainer``)
+    and runs again once its own runs are trained, while the other chapters go on executing and training (the Bullet
+    simulation and the renders overlap the first runs). Each such wait is a *stage* of ``stages``: the runs the
+    chapter asked for, how many of them no other chapter had asked for first (``new``), and how long it waited. The chapters that run last wait until every other
+    chapter is done."""
     from study.runs import (
         schedule,  # torch: only a build that executes a chapter loads it
     )
 
-    rest = [t for t in todo if t[1] not in last]
-    final = [t for t in todo if t[1] in last]
-    asked_before: set[str] = set()
-    for group in (rest, final):
-        if group is final and final:  # the results of every other chapter, merged for them
-            results.merge([c.results_part for c in chs], root / results.FILE, preset)
-        waiting = list(group)
-        while waiting:
-            stopped = []
-            for n, ch, probe, nb, params, info in waiting:
-                where = f"[{n}/{len(chs)}] {ch.stem}"
-                tqdm.write(f"{where}: executing" + (f" (stage {len(stages) + 1})" if stages else ""), file=sys.stderr)
-                t0 = time.perf_counter()
-                try:
-                    _execute(ch, probe, nb, params, root, pending=_pending_file(tmp, ch, stages), device=device,
-                             data_dir=data)
-                except _Pending:
-                    seconds = time.perf_counter() - t0
-                    entry = timings.setdefault(ch.stem, {"seconds": 0.0, "cached": False})
-                    entry["waited"] = round(entry.get("waited", 0.0) + seconds, 3)  # its executions that stopped
-                    tqdm.write(f"{where}: stopped after {_duration(seconds)}, at runs not trained yet", file=sys.stderr)
-                    stopped.append((n, ch, probe, nb, params, info))
-                    continue
-                except ChapterError:
-                    timings[ch.stem] = {**timings.get(ch.stem, {}), "seconds": round(time.perf_counter() - t0, 3),
-                                        "cached": False, "failed": True}
-                    raise
-                seconds = time.perf_counter() - t0
-                done.append((ch, info["base"], info["parameters"], seconds))
-                timings[ch.stem] = {**timings.get(ch.stem, {}), "seconds": round(seconds, 3), "cached": False}
-                tqdm.write(f"{where}: executed in {_duration(seconds)}", file=sys.stderr)
-            waiting = stopped
-            if not waiting:
-                break
-            asked_files = [_pending_file(tmp, t[1], stages) for t in waiting]
-            stage_file = tmp / f"pending-{len(stages)}.jsonl"  # every waiting chapter's, in order, each run once
-            stage_file.write_text("".join(f.read_text() for f in asked_files if f.is_file()))
-            jobs = schedule.pending(stage_file)
-            asked = {schedule.run_key(ds, c, t, device) for ds, c, t in jobs}
-            if not jobs or asked <= asked_before:
-                raise ChapterError(
-                    f"chapters {', '.join(t[1].stem for t in waiting)} stopped for runs that "
-                    + ("they did not name" if not jobs else "were trained in the stage before: the chapters' kernels "
-                       "compute other run keys than the builder (another study package, torch or device?)"))
-            asked_before |= asked
-            t0 = time.perf_counter()
-            tqdm.write(f"stage {len(stages) + 1}: {len(jobs)} runs that {len(waiting)} chapter(s) asked for, trained "
-                       "together", file=sys.stderr)
-            schedule.run_many(jobs, data, desc=f"stage {len(stages) + 1}", progress=True,
-                              workers=workers or None, scheduler=scheduler or None, device=device)
-            stages.append({"runs": len(jobs), "chapters": [t[1].stem for t in waiting],
-                           "seconds": round(time.perf_counter() - t0, 3)})
+    def attempt(entry: tuple, pending: Path) -> tuple[str, float]:
+        n, ch, probe, nb, params, _ = entry
+        tqdm.write(f"[{n}/{len(chs)}] {ch.stem}: executing" + (" again" if tries[ch.stem] > 1 else ""),
+                   file=sys.stderr)
+        t0 = time.perf_counter()
+        try:
+            _execute(ch, probe, nb, params, root, pending=pending, device=device, data_dir=data)
+        except _Pending:
+            return "stopped", time.perf_counter() - t0
+        except ChapterError:
+            timings[ch.stem] = {**timings.get(ch.stem, {}), "seconds": round(time.perf_counter() - t0, 3),
+                                "cached": False, "failed": True}
+            raise
+        return "executed", time.perf_counter() - t0
 
-
-def _pending_file(tmp: Path, ch: Chapter, stages: list) -> Path:
-    """Where ``ch`` lists the runs it needs that are not trained yet, in the current stage of the plan."""
-    return tmp / f"pending-{len(stages)}-{ch.stem}.jsonl"
+    tries: dict[str, int] = {}
+    rest, final = [t for t in todo if t[1] not in last], [t for t in todo if t[1] in last]
+    with schedule.Trainer(data, workers=workers or None, scheduler=scheduler or None, device=device,
+                          progress=True) as trainer, ThreadPoolExecutor(AT_ONCE) as pool:
+        for group in (rest, final):
+            if group is final and final:  # the results of every other chapter, merged for them
+                results.merge([c.results_part for c in chs], root / results.FILE, preset)
+            ready = list(group)
+            running: dict[Future, tuple[tuple, Path, set[str]]] = {}
+            waiting: dict[str, tuple[tuple, list[Future], tuple[int, int], float]] = {}  # stem -> its runs training
+            while ready or running or waiting:
+                while ready and len(running) < AT_ONCE:
+                    entry = ready.pop(0)
+                    tries[entry[1].stem] = tries.get(entry[1].stem, 0) + 1
+                    pending = tmp / f"pending-{entry[1].stem}-{tries[entry[1].stem]}.jsonl"
+                    running[pool.submit(attempt, entry, pending)] = (entry, pending, trainer.trained())
+                awaited = [f for _, fs, _, _ in waiting.values() for f in fs]
+                finished, _ = wait([*running, *awaited], return_when=FIRST_COMPLETED)
+                for stem, (entry, fs, n_runs, t0) in list(waiting.items()):
+                    if all(f.done() for f in fs):
+                        for f in fs:
+                            f.result()  # a worker's error ends the build
+                        del waiting[stem]
+                        stages.append({"runs": n_runs[0], "new": n_runs[1], "chapters": [stem],
+                                       "seconds": round(time.perf_counter() - t0, 3)})
+                        ready.append(entry)
+                for f in finished & running.keys():
+                    entry, pending, before = running.pop(f)
+                    ch, info, where = entry[1], entry[5], f"[{entry[0]}/{len(chs)}] {entry[1].stem}"
+                    outcome, seconds = f.result()
+                    if outcome == "executed":
+                        done.append((ch, info["base"], info["parameters"], seconds))
+                        timings[ch.stem] = {**timings.get(ch.stem, {}), "seconds": round(seconds, 3), "cached": False}
+                        tqdm.write(f"{where}: executed in {_duration(seconds)}", file=sys.stderr)
+                        continue
+                    entry_t = timings.setdefault(ch.stem, {"seconds": 0.0, "cached": False})
+                    entry_t["waited"] = round(entry_t.get("waited", 0.0) + seconds, 3)  # its executions that stopped
+                    jobs = schedule.pending(pending)
+                    if not jobs or {schedule.run_key(ds, c, t, device) for ds, c, t in jobs} <= before:
+                        raise ChapterError(
+                            f"chapter {ch.stem} stopped for runs that "
+                            + ("it did not name" if not jobs else "were trained before it ran: the chapter's kernel "
+                               "computes other run keys than the builder (another study package, torch or device?)"))
+                    n_before = len(trainer.futures)
+                    fs = trainer.submit(jobs)
+                    tqdm.write(f"{where}: stopped after {_duration(seconds)} for {len(jobs)} runs "
+                               f"({len(trainer.futures) - n_before} new to train)", file=sys.stderr)
+                    waiting[ch.stem] = (entry, fs, (len(jobs), len(trainer.futures) - n_before), time.perf_counter())
 
 
 def plan_totals(root: Path) -> dict[str, float]:
-    """The distinct models the book's chapters train (``models``) and the CPU seconds their records took
-    (``train_seconds``), from each chapter's plan part (``study.runs.cluster.plan_totals``)."""
+    """The distinct models the book's chapters train (``models``), the process CPU seconds their records took
+    (``cpu_seconds``) and their epochs (``epochs``), from each chapter's plan part
+    (``study.runs.cluster.plan_totals``)."""
     return cluster.plan_totals([ch.plan_part for ch in chapters(root)])
 
 
@@ -587,8 +622,8 @@ def timings_table(timings: dict[str, dict[str, Any]], runs: dict[str, float] | N
     ran = sum(t["seconds"] for t in timings.values() if not t["cached"])
     lines = ["chapters:", *lines, f"  {'total':<{width}}  {_duration(ran)} executing this time"]
     if runs and runs.get("models"):
-        lines.append(f"runs: {int(runs['models'])} models, {_duration(runs['train_seconds'])} of training (one CPU "
-                     "each, summed from their records)")
+        lines.append(f"runs: {int(runs['models'])} models, {int(runs.get('epochs', 0))} epochs, "
+                     f"{_duration(runs['cpu_seconds'])} of training (process CPU time, summed from their records)")
     return "\n".join(lines)
 
 

@@ -447,14 +447,28 @@ def saved(runner: Runner, dataset: data.Dataset, name: str) -> data.Dataset:
     return data.load(path)
 
 
+def _shapes(runner: Runner, cfg: TrainConfig) -> tuple[dict[str, data.Dataset], Runner]:
+    """The test sets of every shape of :data:`SHAPES` and the runner on the :data:`MIXED` training set."""
+    p, ds = runner.preset, runner.dataset
+    seed = int(ds.meta["seed"]) + SHAPE_SEED_OFFSET
+    sets = shape_sets(p.name, seed, cfg.n_frames(ds.fps) / ds.fps, p.shape_train, p.shape_test,
+                      data_dir=runner.data_dir)
+    return sets, runner.on(saved(runner, mixed_shapes(sets), "mixed"))  # workers read it
+
+
+def chapter_runs(runner: Runner, cfg: TrainConfig) -> list[tuple[Runner, list[TrainConfig], bool]]:
+    """Every run of the chapter at Table 1's ``cfg``, as ``Runner.prefetch`` takes them: the conditions' and the
+    mixed shapes'. Asked for at once, before anything is measured: a planned build stops the chapter once, here."""
+    _, shapes = _shapes(runner, cfg)
+    return condition_configs(runner, cfg) + [(shapes, paper.seed_configs(cfg, runner.preset.grid_seeds, ("z",)),
+                                              True)]
+
+
 def shape_scores(runner: Runner, cfg: TrainConfig, cube_models: Sequence[TrainedModel]) -> list[ShapeScore]:
     """Table 1's Z models (``cube_models``) and Z models trained on :data:`MIXED` at ``cfg`` (the grid's
     seeds), each tested on every shape of :data:`SHAPES`, the first T seconds."""
-    p, ds = runner.preset, runner.dataset
-    T = cfg.n_frames(ds.fps)
-    seed = int(ds.meta["seed"]) + SHAPE_SEED_OFFSET
-    sets = shape_sets(p.name, seed, T / ds.fps, p.shape_train, p.shape_test, data_dir=runner.data_dir)
-    shapes = runner.on(saved(runner, mixed_shapes(sets), "mixed"))  # workers read it
+    p, T = runner.preset, cfg.n_frames(runner.fps)
+    sets, shapes = _shapes(runner, cfg)
     shapes.train_runs(cfg, ("z",), p.grid_seeds, desc="mixed")
     mixed = shapes.models(cfg, p.grid_seeds, dims="z")
     return [ShapeScore(name, scored(cube_models, sd.test.x[:, :T], sd.test.y), scored(mixed, sd.test.x[:, :T],
@@ -699,6 +713,7 @@ def compute(runner: Runner, noise_mm: Sequence[float], sweeps: Mapping[str, Swee
     p, ds = runner.preset, runner.dataset
     prior = runner.synth_config
     cfg = runner.table1_config()
+    runner.prefetch(chapter_runs(runner, cfg), desc="every run of the chapter")
     T = cfg.n_frames(ds.fps)  # the frames every classifier here sees
     drag = drag_cue(ds, T, prior.shape.bounding_radius, noise_mm)
     videos, _ = calibration.rendered(runner)

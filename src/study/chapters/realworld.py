@@ -41,7 +41,8 @@ from study.core.errors import ConfigError, StudyError
 from study.core.progress import Progress
 from study.learn import train
 from study.learn.config import Inputs, TrainConfig
-from study.learn.metrics import Interval, wilson
+from study.learn.metrics import Interval, hierarchical_bootstrap, wilson
+from study.learn.trained import Ensemble
 from study.methods import calibration, tracker
 from study.methods.videos import (  # noqa: F401  (re-exported: the chapter's videos)
     REAL_CLIPS_DEFAULT,
@@ -67,7 +68,7 @@ from study.report.realworld import (
 from study.report.reported import Number, Verdict, number
 from study.report.text import Table, pct, pct_ci
 from study.runs import paper
-from study.runs.stats import scored
+from study.runs.stats import correct_of
 from study.see import render, track, video
 from study.simulate import measure, observe
 
@@ -342,18 +343,20 @@ def heights(model: Model, group: Literal["rendered", "real"], videos: Sequence[V
 
 @dataclass(frozen=True)
 class Recommendation:
-    """The Z model a camera in a car should use (:func:`recommend`), chosen on observed validation throws."""
+    """The Z model a camera in a car should use (:func:`recommend`), chosen on observed validation throws by the
+    mean over seeds."""
 
     choice: str
     """The chosen candidate's name (``"positions, exact"`` and so on, :func:`candidates`)."""
     val: dict[str, Interval]
-    """Each candidate's accuracy on the observed validation throws, with its bootstrap interval."""
-    models: dict[str, train.TrainedModel]
-    """Each candidate's trained model."""
+    """Each candidate's accuracy on the observed validation throws: the mean over its seeds (each seed scored on
+    its own validation split), with a hierarchical bootstrap interval over seeds and throws."""
+    models: dict[str, Ensemble]
+    """Each candidate's seeds, as one classifier (the mean of their probabilities)."""
 
     @property
-    def model(self) -> train.TrainedModel:
-        """The chosen model."""
+    def model(self) -> Ensemble:
+        """The chosen model (its seeds' ensemble)."""
         return self.models[self.choice]
 
 
@@ -372,27 +375,38 @@ def candidates(runner: Runner, cfgs: dict[str, TrainConfig] | None = None,
     return out
 
 
-def recommended(runner: Runner, cands: dict[str, TrainConfig], seed: int = 0,
+def recommended(runner: Runner, cands: dict[str, TrainConfig], seeds: Sequence[int] = (0,),
                 ob: observe.Observation | None = None) -> Recommendation:
-    """Of ``cands`` (name -> config; :func:`candidates`), the one with the highest accuracy on ``seed``'s
-    validation trajectories observed as the calibrated tracker (or ``ob``) observes them (never the test split)."""
+    """Of ``cands`` (name -> config; :func:`candidates`), the one with the highest mean accuracy over ``seeds`` on
+    each seed's validation trajectories observed as the calibrated tracker (or ``ob``) observes them (never the
+    test split)."""
+    if not seeds:
+        raise ConfigError("recommended: seeds is empty; give at least one seed")
     ob = ob or calibration.observation(runner)
-    models = {k: runner.trained(dataclasses.replace(c, dims="z", seed=seed)) for k, c in cands.items()}
     first = next(iter(cands.values()))
-    _, va = train.split_train_val(len(runner.dataset.train.y), first.val_fraction, seed)
-    T = first.n_frames(runner.fps)
-    x_val = ob.observe(runner.dataset.train.x[va, :T], runner.fps, seed=6)
-    val = {k: scored([m], x_val, runner.dataset.train.y[va]) for k, m in models.items()}
+    T, y = first.n_frames(runner.fps), runner.dataset.train.y
+    correct: dict[str, list[np.ndarray]] = {k: [] for k in cands}
+    members: dict[str, list[train.TrainedModel]] = {k: [] for k in cands}
+    for seed in seeds:
+        _, va = train.split_train_val(len(y), first.val_fraction, seed)
+        x_val = ob.observe(runner.dataset.train.x[va, :T], runner.fps, seed=6)
+        for k, c in cands.items():
+            m = runner.trained(dataclasses.replace(c, dims="z", seed=seed))
+            members[k].append(m)
+            correct[k].append(correct_of([m], x_val, y[va])[0])
+    val = {k: hierarchical_bootstrap(c) for k, c in correct.items()}
     choice = max(val, key=lambda k: val[k].value)  # ties: the first candidate
-    return Recommendation(choice, val, models)
+    return Recommendation(choice, val, {k: Ensemble(tuple(ms)) for k, ms in members.items()})
 
 
 def recommend(runner: Runner) -> Recommendation:
-    """Of :func:`candidates` (seed 0, trained together), the one with the highest accuracy on the validation throws
-    observed as the tracker observes them (:func:`recommended`; never the test split or the videos)."""
-    cands = candidates(runner)
-    runner.prefetch([(runner, [dataclasses.replace(c, seed=0) for c in cands.values()], False)], desc="candidates")
-    return recommended(runner, cands)
+    """Of :func:`candidates` (the grid's seeds, trained together), the one with the highest mean accuracy on the
+    validation throws observed as the tracker observes them (:func:`recommended`; never the test split or the
+    videos)."""
+    cands, seeds = candidates(runner), runner.preset.grid_seeds
+    runner.prefetch([(runner, [dataclasses.replace(c, seed=s) for c in cands.values() for s in seeds], False)],
+                    desc="candidates")
+    return recommended(runner, cands, seeds)
 
 
 def scale_sweep(model: Model, rendered: Sequence[Video], real: Sequence[Video], tracks_rendered: dict[str, Tracked],
@@ -523,11 +537,19 @@ class RealWorld:
         return "; ".join(f"of the real clips ({c}), it labels {pct_ci(n.interval)} correctly" for c, n in real.items())
 
 
+def table1_model(runner: Runner) -> Ensemble:
+    """Table 1's Z model over Table 1's seeds as one classifier (the mean of their probabilities): the videos'
+    labels do not hang on one seed."""
+    cfg = runner.table1_config()
+    return Ensemble(tuple(runner.trained(dataclasses.replace(cfg, seed=s)) for s in runner.preset.seeds))
+
+
 def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = None) -> RealWorld:
     """The chapter *Real-world test* on ``runner``'s preset: its rendered throws and the ``real`` clips
-    (:func:`real_clips`), classified by Table 1's Z model (seed 0) or by ``model`` if given, and by the model
-    :func:`recommend` chooses. Every run is cached; the videos are rendered and tracked once."""
-    tm = model if model is not None else runner.trained(runner.table1_config())  # Table 1's Z model, seed 0
+    (:func:`real_clips`), classified by Table 1's Z model (its seeds as one classifier, :func:`table1_model`) or by
+    ``model`` if given, and by the model :func:`recommend` chooses. Every run is cached; the videos are rendered
+    and tracked once."""
+    tm = model if model is not None else table1_model(runner)
     rendered, rcfg = calibration.rendered(runner)
     real = list(real)
     pixel = tracking_error(rendered)
@@ -588,7 +610,7 @@ def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
 
 def _val_table(rec: Recommendation) -> Table:
     rows = [{"model": n, "val": pct_ci(iv), "chosen": "✓" if n == rec.choice else ""} for n, iv in rec.val.items()]
-    return Table(rows, {"model": "candidate (Z, seed 0)", "val": "observed validation accuracy [95 % CI]",
+    return Table(rows, {"model": "candidate (Z)", "val": "observed validation accuracy, mean over seeds [95 % CI]",
                         "chosen": "chosen"})
 
 

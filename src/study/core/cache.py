@@ -142,6 +142,30 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         tmp.unlink(missing_ok=True)
 
 
+@contextlib.contextmanager
+def one_maker(path: str | Path) -> Iterator[None]:
+    """Hold an exclusive lock on ``path``'s lock file (``<path>.lock``) while making ``path``: two processes that
+    need the same cache entry at once (two chapters of a build) make it once; the second waits, then reads it.
+    A folder where no lock can be taken (no ``fcntl``; read-only) makes it without one."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: each process may make it; the atomic rename keeps it whole
+        yield
+        return
+    lock = Path(f"{path}.lock")
+    try:
+        lock.parent.mkdir(parents=True, exist_ok=True)
+        f = open(lock, "a")  # noqa: SIM115 (held across the yield)
+    except OSError:
+        yield
+        return
+    try:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        yield
+    finally:
+        f.close()  # releases the lock
+
+
 def write_bytes_atomic(path: str | Path, data: bytes) -> None:
     """Write ``data`` to ``path`` atomically."""
     with atomic_path(path) as tmp:

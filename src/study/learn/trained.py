@@ -202,6 +202,42 @@ class TrainedModel:
         return out
 
 
+@dataclass(frozen=True)
+class Ensemble:
+    """Several trained models of one input (seeds of one config) used as one classifier: the mean of their
+    probabilities. A number it gives does not hang on which seed's weights one happened to keep."""
+
+    members: tuple[TrainedModel, ...]
+    """The models, every one reading the same dims, frames and frame rate."""
+
+    def __post_init__(self) -> None:
+        if not self.members:
+            raise ConfigError("Ensemble.members is empty; give it at least one trained model")
+        first = self.members[0]
+        if any((m.dims, m.n_frames, m.fps) != (first.dims, first.n_frames, first.fps) for m in self.members):
+            raise ConfigError("Ensemble.members read different inputs (dims, frames or fps); ensemble seeds of one "
+                              "config only")
+
+    @property
+    def dims(self) -> str:
+        """The coordinates its members read ('xyz' or 'z')."""
+        return self.members[0].dims
+
+    @property
+    def fps(self) -> float:
+        """Frames per second of the data its members were trained on."""
+        return self.members[0].fps
+
+    @property
+    def n_frames(self) -> int:
+        """Frames of input its members read."""
+        return self.members[0].n_frames
+
+    def predict_proba(self, x: np.ndarray) -> np.ndarray:
+        """``x`` (n, T, 3) float32 metres -> (n, 2) float64: the members' mean [p_light, p_heavy]."""
+        return np.mean([m.predict_proba(x) for m in self.members], axis=0)
+
+
 def _read_json(path: Path) -> Any:
     try:
         return json.loads(path.read_text())

@@ -42,9 +42,9 @@ def local_cluster(workers: int) -> Any:
 
 
 def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
-    """The distinct models listed in the plan files ``parts`` and the process CPU seconds their records took to
-    train (``cpu_seconds`` summed, or the wall ``train_seconds`` of a record made before it was kept; a record that is
-    missing counts nothing)."""
+    """The distinct models listed in the plan files ``parts`` (``models``), the process CPU seconds their records
+    took to train (``cpu_seconds``: each record's ``cpu_seconds``, or its wall ``train_seconds`` if it was made
+    before that was kept) and the epochs they ran (``epochs``); a record that is missing counts nothing."""
     models: dict[str, str] = {}
     for part in parts:
         if not part.is_file():
@@ -53,9 +53,10 @@ def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
             with contextlib.suppress(ValueError, KeyError, TypeError):
                 entry = json.loads(line)
                 models.setdefault(str(entry["model"]), str(entry["record"]))
-    seconds = 0.0
+    seconds = epochs = 0.0
     for record in models.values():
         with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
             rec = json.loads(Path(record).read_text())
             seconds += float(rec.get("cpu_seconds", rec["train_seconds"]))
-    return {"models": float(len(models)), "train_seconds": seconds}
+            epochs += float(rec.get("epochs_run", 0))
+    return {"models": float(len(models)), "cpu_seconds": seconds, "epochs": epochs}

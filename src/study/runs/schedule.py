@@ -10,6 +10,9 @@ the last to finish are short and no core idles long at the end. The key of every
 submitted and checked again where it trains: a worker whose code, torch or compiled loop differs refuses, rather
 than write a record under another key.
 
+:class:`Trainer` is the build's: one pool for the whole build, a chapter's runs submitted when it stops for them,
+each run once whichever chapter asked first.
+
 :class:`Plan` notes every run a runner was asked for, so a build knows how many models it trained.
 """
 
@@ -20,13 +23,15 @@ import dataclasses
 import json
 import multiprocessing
 import os
+import sys
 from collections.abc import Iterator, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 import torch
+from tqdm import tqdm
 
 from study.core import ticket
 from study.core.errors import StudyError
@@ -132,6 +137,79 @@ def stacks(jobs: Sequence[Job], indices: Sequence[int], size: int) -> list[list[
         groups.setdefault(stack.shape(ds, c) if c.cell in stack.STACKABLE else ("alone", i), []).append(i)
     out = [g[k : k + size] for g in groups.values() for k in range(0, len(g), size)]
     return sorted(out, key=lambda s: -jobs[s[0]][1].n_frames(jobs[s[0]][0].fps))
+
+
+class Trainer:
+    """Runs trained as they are asked for, on one pool kept for a whole build: :meth:`submit` hands a chapter's
+    runs to the workers at once (in stacks, :func:`stacks`), and the chapter waits for its own runs only -- no
+    barrier between chapters, no pool started per batch. A run trained or in training already is not submitted
+    again. ``with Trainer(...) as t:``; leaving it waits for the runs in flight."""
+
+    def __init__(self, data_dir: str | Path, *, workers: int | None = None, scheduler: str | None = None,
+                 device: str = "cpu", progress: bool = False) -> None:
+        self.data_dir, self.device, self.scheduler = Path(data_dir), device, scheduler
+        self.workers = default_workers() if workers is None else workers
+        self.futures: dict[str, Future] = {}
+        """Run key -> the future of the stack that trains it."""
+        self._exit = contextlib.ExitStack()
+        self._refs: dict[str, Any] = {}
+        self._pool: Executor | None = None
+        self._open = False
+        self._bar = tqdm(total=0, desc="runs", unit="run", disable=not progress, file=sys.stderr)
+
+    def __enter__(self) -> Trainer:
+        self._open = True
+        return self
+
+    def _executor(self) -> Executor:
+        """The pool, started at the first run to train (a build that trains nothing reaches no cluster)."""
+        if self._pool is None:
+            if self.scheduler:
+                self._client = client(self.scheduler, self.workers)
+                self._pool = self._client.get_executor()
+            else:
+                ctx = multiprocessing.get_context("spawn")  # no fork of a process that holds torch threads
+                self._pool = self._exit.enter_context(ProcessPoolExecutor(max(1, self.workers), mp_context=ctx))
+        return self._pool
+
+    def __exit__(self, kind: type | None, *exc: object) -> None:
+        if kind is not None and self._pool is not None:  # the build failed: nothing more to train
+            self._pool.shutdown(wait=False, cancel_futures=True)
+        self._exit.close()
+        self._bar.close()
+        self._open = False
+
+    def trained(self) -> set[str]:
+        """The keys of the runs this trainer has finished training."""
+        return {k for k, f in self.futures.items() if f.done() and not f.exception()}
+
+    def _ref(self, ds: Dataset) -> Any:
+        if self.scheduler:  # scattered to every worker once
+            if ds.key not in self._refs:
+                self._refs[ds.key] = self._client.scatter(ds, broadcast=True, hash=False)
+            return self._refs[ds.key]
+        if ds.path is None:
+            raise StudyError(f"the data set of key {ds.key} has no file; the workers read it from one: save it first")
+        return str(ds.path)
+
+    def submit(self, jobs: Sequence[Job]) -> list[Future]:
+        """The futures of ``jobs``' runs not cached yet (each once), training from now on: the ones submitted
+        here and the ones another call submitted first."""
+        if not self._open:
+            raise StudyError("Trainer.submit outside its 'with' block")
+        keys = [run_key(ds, c, t, self.device) for ds, c, t in jobs]
+        first = {k: i for i, k in reversed(list(enumerate(keys)))}
+        fresh = [i for k, i in sorted(first.items(), key=lambda kv: kv[1])
+                 if k not in self.futures and cached(*jobs[i][:2], self.data_dir, jobs[i][2], self.device) is None]
+        for unit in stacks(jobs, fresh, stack_size(self.device)):
+            members = [(self._ref(jobs[i][0]), jobs[i][1], jobs[i][2], keys[i]) for i in unit]
+            f = self._executor().submit(stack_task, members, str(self.data_dir), self.device)
+            f.add_done_callback(lambda _, n=len(unit): self._bar.update(n))
+            for i in unit:
+                self.futures[keys[i]] = f
+        self._bar.total += len(fresh)
+        self._bar.refresh()
+        return list({id(self.futures[k]): self.futures[k] for k in first if k in self.futures}.values())
 
 
 def run_many(jobs: Sequence[Job], data_dir: str | Path, *, desc: str = "runs", progress: bool = False,

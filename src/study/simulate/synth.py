@@ -132,13 +132,14 @@ def dataset(
     if isinstance(cfg, str):
         cfg = SynthConfig.preset(cfg)
     path = default_path(cfg, seed, data_dir)
-    if path.exists():
-        try:
-            return load(path)
-        except data.DataError:
-            pass  # corrupt or truncated: simulate again and replace it
-    ds = generate(cfg, seed, threads=threads, progress=progress)
-    data.save(ds, path)
+    with cache.one_maker(path):  # another chapter simulating the same throws: wait for it, then read them
+        if path.exists():
+            try:
+                return load(path)
+            except data.DataError:
+                pass  # corrupt or truncated: simulate again and replace it
+        ds = generate(cfg, seed, threads=threads, progress=progress)
+        data.save(ds, path)
     return dataclasses.replace(ds, path=path)
 
 
