@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy import stats
 
 from study.learn.config import TrainConfig
 from study.runs import schedule
@@ -135,23 +136,51 @@ def measure(ds, cfgs: dict[tuple[str, str], list[TrainConfig]], data_dir: Path, 
     return rows
 
 
-def choose(rows: Sequence[Row]) -> tuple[str, dict[str, str]]:
-    """The chosen recipe on validation data alone (see the module's docstring), and why each other was not."""
+def settled_recipes(rows: Sequence[Row]) -> tuple[list[str], dict[str, str]]:
+    """The recipes that settle on every network of ``rows`` (and train on every seed), and why each other does
+    not."""
     recipes = list(dict.fromkeys(r.recipe for r in rows))
     of = {name: [r for r in rows if r.recipe == name] for name in recipes}
     settled = [n for n in recipes if all(np.mean(r.swing) <= SETTLED and np.mean(r.climb) <= CLIMB and not r.failed
                                          for r in of[n])]
     why = {n: "does not settle" if any(np.mean(r.swing) > SETTLED or r.failed for r in of[n])
            else "still climbing" for n in recipes if n not in settled}
+    return settled, why
+
+
+def paired_gap(rows: Sequence[Row], a: str, b: str) -> tuple[float, float, float]:
+    """Validation points by which recipe ``b`` trails ``a``, paired by network and seed: the mean and its 95 %
+    t-interval (lo, hi)."""
+    of = {(r.recipe, r.network): r for r in rows}
+    gaps = [va - vb for net in dict.fromkeys(r.network for r in rows) if (a, net) in of and (b, net) in of
+            for va, vb in zip(of[a, net].val, of[b, net].val)]
+    m = float(np.mean(gaps))
+    half = float(stats.t.ppf(0.975, len(gaps) - 1) * np.std(gaps, ddof=1) / np.sqrt(len(gaps))) if len(gaps) > 1 else 0.0
+    return m, m - half, m + half
+
+
+def choose(rows: Sequence[Row], cost_rows: Sequence[Row] = ()) -> tuple[str, dict[str, str]]:
+    """The chosen recipe on validation data alone (see the module's docstring), and why each other was not.
+
+    Of the recipes that settle on the screened networks (``rows``), those as good as the best: within
+    :data:`NEAR` points of its mean validation accuracy, or trailing it by a paired difference whose 95 % interval
+    holds 0 (the seeds cannot tell them apart). Of those, the one with the fewest epochs per run, counted over
+    ``rows`` and, where given, ``cost_rows`` (the confirmation's networks: on the screened ones every
+    averaging recipe runs its whole budget, so only the others tell what a recipe costs the whole study)."""
+    settled, why = settled_recipes(rows)
     if not settled:
         return BASELINE, why | {BASELINE: "none settles: today's stays"}
-    val = {n: float(np.mean([np.mean(r.val) for r in of[n]])) for n in settled}
-    best = max(val.values())
-    near = [n for n in settled if val[n] >= best - NEAR]
-    epochs = {n: float(np.mean([np.mean(r.epochs) for r in of[n]])) for n in near}
+    of = {name: [r for r in [*rows, *cost_rows] if r.recipe == name] for name in settled}
+    val = {n: float(np.mean([np.mean(r.val) for r in rows if r.recipe == n])) for n in settled}
+    best = max(val, key=lambda n: val[n])
+    gap = {n: paired_gap(rows, best, n) for n in settled}
+    near = [n for n in settled if val[n] >= val[best] - NEAR or gap[n][1] <= 0]
+    epochs = {n: float(np.mean([e for r in of[n] for e in r.epochs])) for n in near}
     chosen = min(near, key=lambda n: (epochs[n], -val[n]))
-    why |= {n: f"settles, {best - val[n]:.1f} points below the best" for n in settled if n not in near}
-    why |= {n: f"as good, {epochs[n]:.0f} epochs against {epochs[chosen]:.0f}" for n in near if n != chosen}
+    why |= {n: f"settles, {gap[n][0]:.1f} points below the best [{gap[n][1]:.1f}, {gap[n][2]:.1f}]"
+            for n in settled if n not in near}
+    why |= {n: f"as good ({gap[n][0]:.1f} points [{gap[n][1]:.1f}, {gap[n][2]:.1f}] from the best), "
+               f"{epochs[n]:.0f} epochs a run against {epochs[chosen]:.0f}" for n in near if n != chosen}
     return chosen, why
 
 
@@ -200,18 +229,20 @@ def main(argv: Sequence[str] | None = None) -> int:
           f"{time.perf_counter() - t0:.0f} s wall; settled = on every network, a last-{LAST}-epoch swing <= {SETTLED} "
           f"points and a climb <= {CLIMB} point from the {LAST} epochs before")
     print_validation(rows)
-    chosen, why = choose(rows)
+    confirmed: list[Row] = []
+    if a.confirm:  # every recipe that settles, on the other networks: what each costs the whole study
+        c_seeds = tuple(range(a.confirm_seeds))
+        settled, _ = settled_recipes(rows)
+        confirmed = measure(ds, plan(list(dict.fromkeys((BASELINE, *settled))), CONFIRM, c_seeds, smoke),
+                            a.data_dir, a.workers or None)
+        print(f"\nconfirmation, {len(c_seeds)} seeds, every recipe that settles:")
+        print_validation(confirmed)
+    chosen, why = choose(rows, confirmed)
     print(f"\nchosen on validation: {chosen}")
     for name, reason in why.items():
         print(f"  {name}: {reason}")
     print_test(rows)
-    confirmed = []
-    if a.confirm:
-        c_seeds = tuple(range(a.confirm_seeds))
-        confirmed = measure(ds, plan(list(dict.fromkeys((BASELINE, chosen))), CONFIRM, c_seeds, smoke), a.data_dir,
-                            a.workers or None)
-        print(f"\nconfirmation, {len(c_seeds)} seeds:")
-        print_validation(confirmed)
+    if confirmed:
         print_test(confirmed)
     if a.json:
         a.json.write_text(json.dumps({"preset": a.preset, "chosen": chosen, "why": why,

@@ -39,3 +39,22 @@ def test_when_nothing_settles_todays_recipe_stays():
     b = _bench()
     chosen, why = b.choose(_row(b, b.BASELINE, 95.0, 30.0, 80) + _row(b, "plateau", 97.0, 5.0, 110))
     assert chosen == b.BASELINE and "none settles" in why[b.BASELINE]
+
+
+def test_a_recipe_the_seeds_cannot_tell_from_the_best_is_as_good_and_the_whole_study_counts_its_cost():
+    b = _bench()
+
+    def rows(recipe, vals, epochs, nets=None):
+        return [b.Row(recipe, net, list(vals), [0.5] * 3, [0.0] * 3, [epochs] * 3, [97.0] * 3, 0, 10.0)
+                for net in (nets or b.SCREEN)]
+
+    screen = rows(b.BASELINE, (90.0, 91.0, 92.0), 80) + rows("cosine 150, 1e-3", (99.0, 97.0, 99.0), 150)
+    noisy = screen + rows("constant + EMA", (97.0, 98.0, 97.2), 150)  # 1 point below, the seeds disagree
+    steady = screen + rows("constant + EMA", (98.0, 96.0, 98.0), 150)  # 1 point below on every seed
+    positions = rows("cosine 150, 1e-3", (70.0,) * 3, 150, b.CONFIRM) + rows("constant + EMA", (70.0,) * 3, 60, b.CONFIRM)
+    chosen, why = b.choose(noisy, positions)
+    assert chosen == "constant + EMA", "as good by the paired interval, and cheaper on the whole study"
+    assert why["cosine 150, 1e-3"].startswith("as good")
+    assert b.choose(noisy)[0] == "cosine 150, 1e-3", "on the screen alone both run 150 epochs: the better wins"
+    chosen, why = b.choose(steady, positions)
+    assert chosen == "cosine 150, 1e-3" and "below the best [1.0, 1.0]" in why["constant + EMA"]
