@@ -31,7 +31,7 @@ def test_the_cheapest_of_the_settled_recipes_near_the_best_is_chosen():
     chosen, why = b.choose(rows)
     assert chosen == "cosine 60, 3e-3, warm-up 3", "within 0.5 points of the best settled, and fewer epochs"
     assert why[b.BASELINE] == "does not settle" and why["constant + EMA"] == "does not settle", "a failed seed"
-    assert why["plateau"].startswith("as good") and "below the best" in why["cosine 100, 1e-3"]
+    assert why["plateau"].startswith("the best on validation") and "below the best" in why["cosine 100, 1e-3"]
     assert why["cosine 100, 1e-3, EMA"] == "still climbing", "smooth is not flat: its curve still rises"
 
 
@@ -54,7 +54,22 @@ def test_a_recipe_the_seeds_cannot_tell_from_the_best_is_as_good_and_the_whole_s
     positions = rows("cosine 150, 1e-3", (70.0,) * 3, 150, b.CONFIRM) + rows("constant + EMA", (70.0,) * 3, 60, b.CONFIRM)
     chosen, why = b.choose(noisy, positions)
     assert chosen == "constant + EMA", "as good by the paired interval, and cheaper on the whole study"
-    assert why["cosine 150, 1e-3"].startswith("as good")
+    assert why["cosine 150, 1e-3"].startswith("the best on validation")
     assert b.choose(noisy)[0] == "cosine 150, 1e-3", "on the screen alone both run 150 epochs: the better wins"
     chosen, why = b.choose(steady, positions)
     assert chosen == "cosine 150, 1e-3" and "below the best [1.0, 1.0]" in why["constant + EMA"]
+
+
+def test_a_recipe_whose_seed_fails_on_the_confirmation_is_not_chosen():
+    b = _bench()
+
+    def rows(recipe, val, epochs, nets, failed=0):
+        return [b.Row(recipe, net, [val] * 3, [0.5] * 3, [0.0] * 3, [epochs] * 3, [97.0] * 3, failed, 10.0)
+                for net in nets]
+
+    screen = rows("cosine 150, 1e-3", 98.0, 150, b.SCREEN) + rows("constant + EMA", 98.0, 150, b.SCREEN)
+    confirm = rows("cosine 150, 1e-3", 70.0, 150, b.CONFIRM) + rows("constant + EMA", 70.0, 80, b.CONFIRM, failed=1)
+    trained = rows("cosine 150, 1e-3", 70.0, 150, b.CONFIRM) + rows("constant + EMA", 70.0, 80, b.CONFIRM)
+    assert b.choose(screen, trained)[0] == "constant + EMA", "cheaper where nothing failed"
+    chosen, why = b.choose(screen, confirm)
+    assert chosen == "cosine 150, 1e-3" and why["constant + EMA"].startswith("a seed failed")
