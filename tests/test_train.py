@@ -548,3 +548,11 @@ def test_an_ensemble_is_the_mean_of_its_members_probabilities(ds, tm):
     z = train.fit(ds, dataclasses.replace(TINY, dims="z"), progress=False)
     with pytest.raises(ConfigError, match="different inputs"):
         Ensemble((tm, z))
+
+
+def test_the_weights_average_warms_up_to_its_decay():
+    cfg = TrainConfig()
+    decays = [cfg.ema_decay_at(t) for t in range(0, 20000, 7)]
+    assert cfg.ema_decay_at(0) == pytest.approx(0.1) and decays[-1] == cfg.ema_decay == 0.999
+    assert all(a <= b for a, b in zip(decays, decays[1:])), "it only ever remembers longer"
+    assert cfg.ema_decay_at(90) <= 0.91, "a run of a hundred steps is not held at its initial weights"

@@ -71,13 +71,14 @@ INPUT_NAMES: dict[Inputs, str] = {"positions": "positions (the paper's)", "veloc
 NETWORKS: tuple[Network, ...] = ("positions", "velocity", "speed", "rotated")
 NETWORK_NAMES: dict[Network, str] = {**INPUT_NAMES, "rotated": "positions, trained on turned throws (beyond the paper)"}
 """Each network in words."""
-SCHEDULE_NAMES: dict[Schedule, str] = {"constant": "constant (the study's protocol)", "plateau": "halved on plateaus"}
+SCHEDULE_NAMES: dict[Schedule, str] = {"constant": "constant (the study's protocol)", "plateau": "halved on plateaus",
+                                       "cosine": "warm-up, then cosine decay"}
 """Each learning-rate schedule in words."""
 ROTATE = 180.0
 """The augmentation's range, degrees: any heading, as the throws are launched."""
 TURN_SEED = 28
 """Seed of the angles the test throws are turned by (:func:`heading_flips`)."""
-PROTOCOL_KEYS: tuple[ProtocolKey, ...] = ("first", "forget_bias", "min_epochs", "clipping", "plateau")
+PROTOCOL_KEYS: tuple[ProtocolKey, ...] = ("first", "forget_bias", "min_epochs", "clipping", "average", "plateau")
 """The results file's name of each protocol of ``paper.PROTOCOLS``, in order."""
 
 
@@ -297,6 +298,8 @@ class Table1:
     """Test trajectories."""
     min_epochs: int
     patience: int
+    ema_decay: float
+    """Decay per step of the weights' average every run keeps."""
     max_epochs: int
     n_grid_seeds: int
     n_seeds: int
@@ -317,6 +320,8 @@ class Table1:
     gru_lrs: str
     clip_gain: str
     """What clipping changed, in points, per input."""
+    average_gain: str
+    """What averaging the weights (the study's protocol) changed on top of clipping, in points, per input."""
     last_gain: str
     """What halving the learning rate on plateaus changed on top."""
     last_kept: bool
@@ -609,13 +614,18 @@ def _protocols(protocols: Runs) -> tuple[dict[ProtocolKey, dict[Dims, ProtocolRo
                                     count(val[names[i], d].failed, f"stalled seeds, {names[i]}"))
                      for d in both} for i, key in enumerate(PROTOCOL_KEYS)}
     study = names[paper.STUDY_PROTOCOL]
-    step = {d: val[study, d].mean - val[names[paper.STUDY_PROTOCOL - 1], d].mean for d in both}
-    last = {d: val[names[-1], d].mean - val[study, d].mean for d in both}
+
+    def gain(key: ProtocolKey) -> dict[Dims, float]:  # what the row of ``key`` added to the row above it
+        i = PROTOCOL_KEYS.index(key)
+        return {d: val[names[i], d].mean - val[names[i - 1], d].mean for d in both}
+
+    step, averaged, last = gain("clipping"), gain("average"), gain("plateau")
     facts = {
         "stalls_first": sum(val[names[0], d].failed for d in both),
         "stalls_study": sum(val[study, d].failed for d in both),
         "n_protocol_runs": sum(val[names[0], d].n for d in both),
         "clip_gain": " and ".join(f"{100 * step[d]:+.1f} points ({paper.DIMS_NAMES[d]})" for d in both),
+        "average_gain": " and ".join(f"{100 * averaged[d]:+.1f} points ({paper.DIMS_NAMES[d]})" for d in both),
         "last_gain": " and ".join(f"{100 * last[d]:+.1f} points ({paper.DIMS_NAMES[d]})" for d in both),
         "last_kept": min(last.values()) > 0.005, "clip_helps": min(step.values()) > 0.005,
     }
@@ -809,7 +819,7 @@ def compute(runner: Runner) -> Table1:
         ablation_table, baseline_table,
         n_params=sum(t.numel() for t in Classifier(3).parameters()), length_s=p.length,
         length_frames=round(p.length * ds.fps), n_train=len(ds.train), n_test=len(ds.test), min_epochs=p.min_epochs,
-        patience=p.patience, max_epochs=p.max_epochs, n_grid_seeds=len(p.grid_seeds), n_seeds=len(p.seeds),
+        patience=p.patience, max_epochs=p.max_epochs, ema_decay=p.ema_decay, n_grid_seeds=len(p.grid_seeds), n_seeds=len(p.seeds),
         n_data=len(p.data_seeds), first_patience=p.first_patience, first_max_epochs=p.first_max_epochs,
         grid_runs=grid_runs, lstm_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("peephole")),
         gru_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("gru")), defaults_moved=paper.differs_from_defaults(g.config, p),

@@ -94,11 +94,13 @@ class TrainConfig:
     ``max_epochs - 1``: a short budget warms up for less)."""
     lr_floor: float = 0.01
     """With 'cosine': the last epoch's rate over ``lr``."""
-    average: Average = "none"
-    """'none', or 'ema': validate and keep an exponential moving average of the weights (one update per step,
-    ``ema_decay``), which does not swing with each step as the weights do."""
+    average: Average = "ema"
+    """'ema': validate and keep an exponential moving average of the weights (one update per step, ``ema_decay``),
+    which does not swing with each step as the weights do (the study's recipe, ``benchmarks/bench_recipe.py``);
+    'none': the optimiser's own weights, as the study trained before."""
     ema_decay: float = 0.999
-    """With 'ema': the average's decay per step (0.999: about the last thousand steps)."""
+    """With 'ema': the average's decay per step (0.999: about the last thousand steps), reached after a warm-up
+    (:meth:`ema_decay_at`)."""
     loss_at: Loss = "last"
     """'last': the loss is the answer's at the last frame (the paper's network); 'every': the mean of the
     answers' at every frame, so the network answers at every frame (back-propagation then runs through
@@ -184,6 +186,12 @@ class TrainConfig:
         span = self.max_epochs - warm - 1  # epochs after the first of the decay
         progress = 1.0 if span <= 0 else min(1.0, (epoch - warm) / span)
         return self.lr * (self.lr_floor + (1 - self.lr_floor) * 0.5 * (1 + math.cos(math.pi * progress)))
+
+    def ema_decay_at(self, step: int) -> float:
+        """The weights' average's decay at ``step`` (0-based, counted over the whole run): ``ema_decay``, but at
+        most ``(1 + step) / (10 + step)`` early on (TensorFlow's ``ExponentialMovingAverage`` with
+        ``num_updates``), so that a short run is not held near its initial weights."""
+        return min(self.ema_decay, (1 + step) / (10 + step))
 
     def n_frames(self, fps: float) -> int:
         """T in frames at ``fps``: ``round(length * fps)``, at least 1."""

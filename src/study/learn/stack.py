@@ -243,6 +243,8 @@ class Member:
     """Its weights at its best validation epoch (at first: its initial weights)."""
     ema: torch.Tensor | None = None
     """With ``average='ema'``: the moving average of its weights (P,), which is validated and kept instead."""
+    steps: int = 0
+    """Optimiser steps it has taken (the average's warm-up counts them)."""
     diverged: int | None = None
     total: float = 0.0
     order: torch.Tensor | None = None
@@ -422,7 +424,9 @@ def _epoch(active: list[Member], layout: Layout, sh: Shape, stats: dict, epoch: 
                 torch.nn.utils.clip_grad_norm_([m.flat], m.cfg.clip_norm, foreach=False)
             m.opt.step()
             if m.ema is not None:
-                m.ema.mul_(m.cfg.ema_decay).add_(m.flat.detach(), alpha=1 - m.cfg.ema_decay)
+                decay = m.cfg.ema_decay_at(m.steps)
+                m.ema.mul_(decay).add_(m.flat.detach(), alpha=1 - decay)
+            m.steps += 1
             m.total += value * len(idx[0])
 
 

@@ -162,6 +162,7 @@ def _fit_alone(dataset: Dataset, cfg: TrainConfig, progress: bool) -> TrainedMod
         bar = tqdm(range(cfg.max_epochs), desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
         params = list(net.parameters())
         ema = [p.detach().clone() for p in params] if cfg.average == "ema" else None
+        steps = 0  # optimiser steps so far
         for epoch in bar:
             lr = cfg.lr_at(epoch)  # a cosine budget sets each epoch's rate; the others set it as they go
             if lr is not None:
@@ -182,8 +183,10 @@ def _fit_alone(dataset: Dataset, cfg: TrainConfig, progress: bool) -> TrainedMod
                     torch.nn.utils.clip_grad_norm_(net.parameters(), cfg.clip_norm, foreach=True)
                 opt.step()
                 if ema is not None:
-                    torch._foreach_mul_(ema, cfg.ema_decay)
-                    torch._foreach_add_(ema, [p.detach() for p in params], alpha=1 - cfg.ema_decay)
+                    decay = cfg.ema_decay_at(steps)
+                    torch._foreach_mul_(ema, decay)
+                    torch._foreach_add_(ema, [p.detach() for p in params], alpha=1 - decay)
+                steps += 1
                 total += loss.item() * len(idx)
             if diverged is not None:
                 history.append({"epoch": epoch, "train_loss": math.nan, "val_loss": math.nan, "val_accuracy": math.nan})

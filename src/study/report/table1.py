@@ -14,7 +14,7 @@ Network = Literal["positions", "velocity", "speed", "rotated"]
 paper's on positions, trained on throws turned about the vertical."""
 
 
-ProtocolKey = Literal["first", "forget_bias", "min_epochs", "clipping", "plateau"]
+ProtocolKey = Literal["first", "forget_bias", "min_epochs", "clipping", "average", "plateau"]
 
 
 ORDER: tuple[Dims, ...] = ("xyz", "z")

@@ -51,6 +51,8 @@ class Preset:
     """Early-stopping patience of every run, epochs."""
     min_epochs: int = _PROTOCOL.min_epochs
     """Epochs before early stopping may end a run."""
+    ema_decay: float = _PROTOCOL.ema_decay
+    """Decay per step of the weights' average every run keeps (a preset of a few steps needs a short one)."""
     cell_lrs: tuple[tuple[Cell, tuple[float, ...]], ...] = ()
     """Grid: the learning rates of the cells that have their own, as (cell, rates) pairs."""
     cells: tuple[Cell, ...] = ("peephole", "no-peephole", "gru")
@@ -85,7 +87,8 @@ class Preset:
         """The config every run starts from, before the grid values are set: the study's protocol, cut to
         this preset's epochs."""
         return dataclasses.replace(_PROTOCOL, dims=self.ablation_dims, length=self.length,
-                                   max_epochs=self.max_epochs, patience=self.patience, min_epochs=self.min_epochs)
+                                   max_epochs=self.max_epochs, patience=self.patience, min_epochs=self.min_epochs,
+                                   ema_decay=self.ema_decay)
 
     def grid_lrs(self, cell: Cell) -> tuple[float, ...]:
         """The learning rates of ``cell``'s grid."""
