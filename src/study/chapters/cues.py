@@ -448,12 +448,17 @@ def saved(runner: Runner, dataset: data.Dataset, name: str) -> data.Dataset:
 
 
 def _shapes(runner: Runner, cfg: TrainConfig) -> tuple[dict[str, data.Dataset], Runner]:
-    """The test sets of every shape of :data:`SHAPES` and the runner on the :data:`MIXED` training set."""
+    """The test sets of every shape of :data:`SHAPES` and the runner on the :data:`MIXED` training set, read once
+    per runner (the chapter's plan and its scores both need them)."""
     p, ds = runner.preset, runner.dataset
     seed = int(ds.meta["seed"]) + SHAPE_SEED_OFFSET
-    sets = shape_sets(p.name, seed, cfg.n_frames(ds.fps) / ds.fps, p.shape_train, p.shape_test,
-                      data_dir=runner.data_dir)
-    return sets, runner.on(saved(runner, mixed_shapes(sets), "mixed"))  # workers read it
+    T = cfg.n_frames(ds.fps)
+
+    def make() -> tuple[dict[str, data.Dataset], Runner]:
+        sets = shape_sets(p.name, seed, T / ds.fps, p.shape_train, p.shape_test, data_dir=runner.data_dir)
+        return sets, runner.on(saved(runner, mixed_shapes(sets), "mixed"))  # workers read it
+
+    return runner.memo(f"shapes-{T}", make)
 
 
 def chapter_runs(runner: Runner, cfg: TrainConfig) -> list[tuple[Runner, list[TrainConfig], bool]]:

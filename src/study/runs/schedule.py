@@ -198,8 +198,10 @@ class Trainer:
         if not self._open:
             raise StudyError("Trainer.submit outside its 'with' block")
         keys = [run_key(ds, c, t, self.device) for ds, c, t in jobs]
-        first = {k: i for i, k in reversed(list(enumerate(keys)))}
-        fresh = [i for k, i in sorted(first.items(), key=lambda kv: kv[1])
+        first: dict[str, int] = {}
+        for i, k in enumerate(keys):
+            first.setdefault(k, i)  # each run once, in the order asked
+        fresh = [i for k, i in first.items()
                  if k not in self.futures and cached(*jobs[i][:2], self.data_dir, jobs[i][2], self.device) is None]
         for unit in stacks(jobs, fresh, stack_size(self.device)):
             members = [(self._ref(jobs[i][0]), jobs[i][1], jobs[i][2], keys[i]) for i in unit]
@@ -209,7 +211,7 @@ class Trainer:
                 self.futures[keys[i]] = f
         self._bar.total += len(fresh)
         self._bar.refresh()
-        return list({id(self.futures[k]): self.futures[k] for k in first if k in self.futures}.values())
+        return list(dict.fromkeys(self.futures[k] for k in first if k in self.futures))
 
 
 def run_many(jobs: Sequence[Job], data_dir: str | Path, *, desc: str = "runs", progress: bool = False,
