@@ -24,7 +24,7 @@ import json
 import multiprocessing
 import os
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from functools import lru_cache
 from pathlib import Path
@@ -114,20 +114,6 @@ def client(scheduler: str, workers: int = 0):
     return Client(address, security=Security(), set_as_default=False)
 
 
-@contextlib.contextmanager
-def _executor(datasets: Sequence[Dataset], n: int, workers: int, scheduler: str | None) -> Iterator[tuple[Executor, list]]:
-    """An executor for ``n`` tasks on ``datasets`` and what to send its workers for each dataset: its path for a
-    local pool (each worker reads the file once), or a Dask future of it scattered to every worker once."""
-    if scheduler:
-        c = client(scheduler, workers)
-        yield c.get_executor(), [c.scatter(ds, broadcast=True, hash=False) for ds in datasets]
-        return
-    refs: list = [str(ds.path) if ds.path is not None else ds for ds in datasets]
-    ctx = multiprocessing.get_context("spawn")  # no fork of a process that holds torch threads
-    with ProcessPoolExecutor(min(workers, n), mp_context=ctx) as pool:
-        yield pool, refs
-
-
 def stacks(jobs: Sequence[Job], indices: Sequence[int], size: int) -> list[list[int]]:
     """The ``indices`` of ``jobs`` as stacks: runs of one shape together, at most ``size`` a stack (a cell without
     a stacked form alone), the longest inputs first."""
@@ -151,6 +137,8 @@ class Trainer:
         self.workers = default_workers() if workers is None else workers
         self.futures: dict[str, Future] = {}
         """Run key -> the future of the stack that trains it."""
+        self._place: dict[str, int] = {}
+        """Run key -> its place in its stack's list of records."""
         self._exit = contextlib.ExitStack()
         self._refs: dict[str, Any] = {}
         self._pool: Executor | None = None
@@ -188,9 +176,7 @@ class Trainer:
             if ds.key not in self._refs:
                 self._refs[ds.key] = self._client.scatter(ds, broadcast=True, hash=False)
             return self._refs[ds.key]
-        if ds.path is None:
-            raise StudyError(f"the data set of key {ds.key} has no file; the workers read it from one: save it first")
-        return str(ds.path)
+        return str(ds.path) if ds.path is not None else ds  # a file: each worker reads it once
 
     def submit(self, jobs: Sequence[Job]) -> list[Future]:
         """The futures of ``jobs``' runs not cached yet (each once), training from now on: the ones submitted
@@ -204,14 +190,20 @@ class Trainer:
         fresh = [i for k, i in first.items()
                  if k not in self.futures and cached(*jobs[i][:2], self.data_dir, jobs[i][2], self.device) is None]
         for unit in stacks(jobs, fresh, stack_size(self.device)):
+            pool = self._executor()  # first: a Dask client is what scatters the data sets
             members = [(self._ref(jobs[i][0]), jobs[i][1], jobs[i][2], keys[i]) for i in unit]
-            f = self._executor().submit(stack_task, members, str(self.data_dir), self.device)
+            f = pool.submit(stack_task, members, str(self.data_dir), self.device)
             f.add_done_callback(lambda _, n=len(unit): self._bar.update(n))
-            for i in unit:
+            for place, i in enumerate(unit):
                 self.futures[keys[i]] = f
+                self._place[keys[i]] = place
         self._bar.total += len(fresh)
         self._bar.refresh()
         return list(dict.fromkeys(self.futures[k] for k in first if k in self.futures))
+
+    def record(self, key: str) -> dict[str, Any]:
+        """The record of the run of ``key`` this trainer trained (waits for it; a worker's error raised here)."""
+        return self.futures[key].result()[self._place[key]]
 
 
 def run_many(jobs: Sequence[Job], data_dir: str | Path, *, desc: str = "runs", progress: bool = False,
@@ -230,18 +222,13 @@ def run_many(jobs: Sequence[Job], data_dir: str | Path, *, desc: str = "runs", p
     note = f"{len(jobs) - len(todo)} of {len(jobs)} cached" if len(todo) < len(jobs) else ""
     with Progress(desc, total=len(todo), show=progress and bool(todo), note=note, unit="run") as bar:
         if scheduler or (workers > 1 and len(units) > 1):
-            datasets = list({id(jobs[i][0]): jobs[i][0] for i in todo}.values())
-            index = {id(ds): k for k, ds in enumerate(datasets)}
-            with _executor(datasets, len(units), workers, scheduler) as (pool, refs):
-                futures = {}
-                for unit in units:
-                    members = [(refs[index[id(jobs[i][0])]], jobs[i][1], jobs[i][2],
-                                run_key(jobs[i][0], jobs[i][1], jobs[i][2], device)) for i in unit]
-                    futures[pool.submit(stack_task, members, str(data_dir), device)] = unit
+            pool = workers if scheduler else min(workers, len(units))
+            with Trainer(data_dir, workers=pool, scheduler=scheduler, device=device) as trainer:
+                futures = trainer.submit([jobs[i] for i in todo])
                 for f in as_completed(futures):
-                    for i, rec in zip(futures[f], f.result()):
-                        records[i] = rec
-                    bar.update(len(futures[f]))
+                    bar.update(len(f.result()))
+                for i in todo:
+                    records[i] = trainer.record(run_key(*jobs[i], device))
         else:
             for unit in units:
                 for i, rec in zip(unit, train_stack([jobs[i] for i in unit], data_dir, device)):
