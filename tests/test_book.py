@@ -392,6 +392,10 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
     again = book.execute(tmp_path, "smoke", only=["table1", "decision"])  # every run they ask for is trained
     assert not json.loads((tmp_path / "_build" / "executed" / "timings.json").read_text())["stages"]
     assert sorted((tmp_path / "data" / "runs").glob("*.json")) == records, "executing after the plan trains no run"
+    from study.runs import recommended
+
+    rec = recommended.read(tmp_path / "data")  # the model `study classify` uses without --model
+    assert rec.preset == "smoke" and all(m.is_dir() for m in rec.models)
     assert not again["table1"]["cached"] and "waited" not in again["table1"]
     index = tmp_path / "_build" / "html" / "book" / "intro.html"
     assert "The motion-pattern study" in index.read_text()

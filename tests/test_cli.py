@@ -133,3 +133,43 @@ def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, s
                          "--no-progress"]) == 0
         line = capsys.readouterr().out.strip().splitlines()[-1]
         assert line.startswith(f"{source}: ") and ("light (p = " in line or "heavy (p = " in line), line
+
+
+def test_classify_without_a_model_and_without_a_build_says_how_to_get_one(tmp_path, capsys):
+    csv = tmp_path / "t.csv"
+    csv.write_text("frame,t_s,u_px,v_px,height_m,status,segment,confidence\n0,0,1,2,0.1,measured,0,1\n")
+    rc = cli.main(["classify", str(csv), "--data-dir", str(tmp_path / "empty")])
+    line = one_error_line(capsys)
+    assert rc == 2 and "no recommended model" in line and "make book" in line and "--model DIR" in line
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "recommended.json").write_text("{not json")
+    rc = cli.main(["classify", str(csv), "--data-dir", str(tmp_path / "d")])
+    line = one_error_line(capsys)
+    assert rc == 2 and "recommended.json cannot be read" in line
+
+
+@pytest.mark.slow  # trains a tiny model
+def test_classify_without_a_model_uses_the_builds_recommended_one(tmp_path, dataset_file, capsys):
+    from study.learn.metrics import Interval
+    from study.runs import recommended
+
+    data = tmp_path / "data"
+    out = data / "models" / "m"
+    assert cli.main(["train", "--data", str(dataset_file), "--length", "0.5", "--epochs", "1", "--dims", "z",
+                     "--out", str(out), "--no-progress"]) == 0
+    recommended.save(data, "positions, exact", [out, out], Interval(0.9, 0.8, 0.95, "test"), "smoke")
+    assert "models/m" in (data / "recommended.json").read_text()  # relative: the folder can move
+    moved = tmp_path / "moved"
+    data.rename(moved)
+    csv = tmp_path / "t.csv"
+    csv.write_text("frame,t_s,u_px,v_px,height_m,status,segment,confidence\n"
+                   + "".join(f"{i},{i / 30:.6f},10,{50 + i},{0.5 - i / 100:.4f},measured,0,1\n" for i in range(20)))
+    capsys.readouterr()
+    assert cli.main(["classify", str(csv), "--data-dir", str(moved)]) == 0
+    line = capsys.readouterr().out.strip()
+    assert "smoke build's recommended model (positions, exact, 2 seeds; 90.0 %" in line, line
+    import shutil
+
+    shutil.rmtree(moved / "models")
+    assert cli.main(["classify", str(csv), "--data-dir", str(moved)]) == 2
+    assert "which is gone" in one_error_line(capsys)

@@ -306,7 +306,8 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         "classify",
         help="say whether a tracked object is light (bouncy) or heavy (sliding)",
         description=(
-            "Classify one throw with a trained model (a directory written by the training step). "
+            "Classify one throw with a trained model (a directory written by the training step; without "
+            "--model, the one the last book build in the data folder recommends). "
             "INPUT is a video (tracked first, as 'study track' does) or a trajectory CSV from "
             "'study track --out'. The longest piece of the track is resampled to the model's frame "
             "rate and cut or zero-padded to its input length; a single camera gives only the height, "
@@ -314,7 +315,12 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument("input", type=Path, metavar="VIDEO_OR_CSV", help="a video, or a trajectory CSV from 'study track --out'")
-    p.add_argument("--model", type=Path, required=True, help="trained model directory")
+    p.add_argument("--model", type=Path, default=None,
+                   help="trained model directory (default: the model the last book build in the data folder "
+                   "recommends for a camera, its seeds' mean)")
+    p.add_argument("--data-dir", type=Path, default=None,
+                   help="data folder whose recommended model to use without --model (default: $STUDY_DATA_DIR, "
+                   "else data/ here)")
     _add_tracker_options(p)
     p.add_argument("--object-size", type=float, default=0.067,
                    help="the object's diameter in metres, for the pixel->metre scale (default: %(default)s, a tennis ball)")
@@ -328,12 +334,21 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         from study.learn import train
         from study.see import track
 
-        tm = train.load(a.model)
-        if tm.failed:
-            _warn(f"model {a.model}: {tm.failure()}; its answers are near chance")
+        if a.model is not None:
+            tm, which = train.load(a.model), f"model {a.model}"
+            members = [tm]
+        else:
+            from study.core import datadir
+            from study.runs import recommended
+
+            tm, rec = recommended.load(datadir.resolve(a.data_dir))
+            which, members = rec.describe(), list(tm.members)
+        for m in members:
+            if m.failed:
+                _warn(f"{which}: {m.failure()}; its answers are near chance")
         if tm.dims != "z":
             raise ModelError(
-                f"model {a.model} was trained on {tm.dims!r}; one camera gives only the height: "
+                f"{which} was trained on {tm.dims!r}; one camera gives only the height: "
                 "use a model trained on 'z' (the paper's real-world test does)"
             )
         if a.input.suffix.lower() == ".csv":
@@ -351,7 +366,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         x = track.to_model_input(traj, tm.fps, tm.n_frames, rest_height=rest)
         p_cls = tm.predict_proba(x[None])[0]
         k = int(p_cls.argmax())
-        print(f"{a.input}: {CLASSES[k]} (p = {float(p_cls[k]):.3f})")
+        print(f"{a.input}: {CLASSES[k]} (p = {float(p_cls[k]):.3f}; {which})")
         return 0
 
     p.set_defaults(run=run)

@@ -67,7 +67,8 @@ from study.report.realworld import (
 )
 from study.report.reported import Number, Verdict, number
 from study.report.text import Table, pct, pct_ci
-from study.runs import paper
+from study.runs import paper, records
+from study.runs import recommended as saved
 from study.runs.stats import correct_of
 from study.see import render, track, video
 from study.simulate import measure, observe
@@ -402,11 +403,16 @@ def recommended(runner: Runner, cands: dict[str, TrainConfig], seeds: Sequence[i
 def recommend(runner: Runner) -> Recommendation:
     """Of :func:`candidates` (the grid's seeds, trained together), the one with the highest mean accuracy on the
     validation throws observed as the tracker observes them (:func:`recommended`; never the test split or the
-    videos)."""
+    videos), written to the data folder as the model ``study classify`` uses without ``--model``
+    (``study.runs.recommended``)."""
     cands, seeds = candidates(runner), runner.preset.grid_seeds
     runner.prefetch([(runner, [dataclasses.replace(c, seed=s) for c in cands.values() for s in seeds], False)],
                     desc="candidates")
-    return recommended(runner, cands, seeds)
+    rec = recommended(runner, cands, seeds)
+    dirs = [records.model_dir(runner.dataset, dataclasses.replace(cands[rec.choice], dims="z", seed=s), runner.data_dir,
+                              runner.device) for s in seeds]
+    saved.save(runner.data_dir, rec.choice, dirs, rec.val[rec.choice], runner.preset.name)  # study classify's default
+    return rec
 
 
 def scale_sweep(model: Model, rendered: Sequence[Video], real: Sequence[Video], tracks_rendered: dict[str, Tracked],
