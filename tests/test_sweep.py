@@ -38,12 +38,14 @@ def test_the_scene_camera_projects_as_the_shots_pinhole():
 @pytest.mark.slow
 def test_a_smoke_sweep_renders_each_family_once_and_reads_it_back(tmp_path):
     cfg = synth.SynthConfig.preset("smoke")
-    clips = sweep.sweep_set(cfg, per_family=1, seed=2000, out_dir=tmp_path, progress=False, frame_scale=0.25)
+    clips = sweep.sweep_set(cfg, per_family=1, seed=2000, out_dir=tmp_path, progress=False, frame_scale=0.25,
+                             duration=1.0)
     assert [c.shot.family for c in clips] == list(sweep.FAMILIES)
     assert [c.video.label for c in clips] == ["light"] * 4  # one a family: the first class
     assert all(c.video.path.is_file() and c.video.truth.is_file() for c in clips)
     stamp = [c.video.path.stat().st_mtime_ns for c in clips]
-    again = sweep.sweep_set(cfg, per_family=1, seed=2000, out_dir=tmp_path, progress=False, frame_scale=0.25)
+    again = sweep.sweep_set(cfg, per_family=1, seed=2000, out_dir=tmp_path, progress=False, frame_scale=0.25,
+                             duration=1.0)
     assert [c.video.path.stat().st_mtime_ns for c in again] == stamp
     truth = render.read_truth(clips[0].video.truth)
     assert (truth["z"] > 0).all()

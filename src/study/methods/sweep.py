@@ -57,7 +57,7 @@ LIGHT = (0.45, 1.0)
 MIN_PIXELS = 8.0
 """Narrowest the object may appear, pixels."""
 DURATION = 3.0
-"""Clip length, seconds."""
+"""Clip length, seconds (the models' input)."""
 
 
 @dataclass(frozen=True)
@@ -153,17 +153,17 @@ class Clip:
 
 
 def sweep_set(cfg, per_family: int, seed: int, out_dir: str | Path, progress: bool = True,
-              max_draws: int = 50, frame_scale: float = 1.0) -> list[Clip]:
+              max_draws: int = 50, frame_scale: float = 1.0, duration: float = DURATION) -> list[Clip]:
     """``per_family`` clips of each family in :data:`FAMILIES`, the classes alternating within each, from ``cfg``'s priors (a
     ``synth.SynthConfig``; throws of ``synth.sample_split(cfg, seed, "test")``, so give a ``seed`` no training set
     uses), each through a shot drawn until the object is :func:`visible` (at most ``max_draws`` draws, else the
-    throw is skipped). ``frame_scale`` shrinks every frame size (a smoke test's). Rendered once under ``out_dir``,
+    throw is skipped). ``frame_scale`` shrinks every frame size and ``duration`` (seconds) cuts the clips (a smoke test's). Rendered once under ``out_dir``,
     then read from the cache."""
     n = per_family * len(FAMILIES)
     cfg = cfg.replace(n_test=2 * n)  # spare throws for the ones no shot can keep in view
     code = cache.source_hash(*cache.closure("study.methods.sweep"))
     key = cache.key({"synth": cfg.to_dict(), "seed": seed, "per_family": per_family, "max_draws": max_draws,
-                     "frame_scale": frame_scale, "code": code})
+                     "frame_scale": frame_scale, "duration": duration, "code": code})
     folder = Path(out_dir) / f"sweep-{key}"
     params = synth_split(cfg, seed)
     size = _object_size(cfg)
@@ -176,7 +176,7 @@ def sweep_set(cfg, per_family: int, seed: int, out_dir: str | Path, progress: bo
             while queue:
                 i = int(queue.pop(0))
                 model, qpos, qvel = videos.throw(cfg, params, i)
-                path = render.simulate(model, qpos, qvel, round(DURATION / model.opt.timestep))[:, :3]
+                path = render.simulate(model, qpos, qvel, round(duration / model.opt.timestep))[:, :3]
                 shot = _keep(family, path, size, rng, max_draws, frame_scale)
                 if shot is not None:
                     plan.append((i, *shot))
@@ -193,7 +193,7 @@ def sweep_set(cfg, per_family: int, seed: int, out_dir: str | Path, progress: bo
         for c, i, cam in todo:
             model, qpos, qvel = videos.throw(cfg, params, i)
             dress(model, c.shot, cam)
-            rcfg = render.RenderConfig(width=c.shot.width, height=c.shot.height_px, fps=c.shot.fps, duration=DURATION,
+            rcfg = render.RenderConfig(width=c.shot.width, height=c.shot.height_px, fps=c.shot.fps, duration=duration,
                                        blur_subframes=2, noise_std=2.0, jpeg_quality=85, seed=seed + i)
             render.render(model, qpos, qvel, c.video.path, rcfg)
             bar.update()
