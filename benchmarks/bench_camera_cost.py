@@ -45,7 +45,8 @@ size = G.apparent_size("box", (0.2,)*3)
 t = np.arange(90)/30
 def inp(z):
     x = np.zeros((90, 3), np.float32); x[:, 2] = z; return x
-X = {"exact": [], "one scale": [], "one scale, mean silhouette": [], "one scale x gravity": [], "image only": []}
+X = {"exact": [], "one scale": [], "one scale, mean silhouette": [], "one scale x gravity": [], "image only": [],
+     "true camera, size depth": [], "true camera, size depth smoothed": []}
 keep = []
 for tilt in (0, 20, 45):
     for j, st in enumerate(states):
@@ -65,10 +66,15 @@ for tilt in (0, 20, 45):
         X["one scale x gravity"].append(inp(B.REST + lam*h))
         mean = (uv[:, 1].max() - uv[:, 1]) * size / np.sqrt(np.mean(diam ** 2)) + B.REST
         X["one scale, mean silhouette"].append(inp(mean))
+        from scipy.ndimage import uniform_filter1d
+        med = G._running_median(diam, 5)
+        for name, dd in (("true camera, size depth", med), ("true camera, size depth smoothed", np.exp(uniform_filter1d(np.log(med), 15, mode="nearest")))):
+            depth = cam.focal * size / dd
+            X[name].append(inp(cam.position[2] + depth * cam.rays(uv[:, 0], uv[:, 1])[:, 2]))
         X["exact"].append(inp(st[:, 2])); X["one scale"].append(inp(one)); X["image only"].append(inp(zg if zg is not None else one))
         keep.append((tilt, labels[j]))
 keep = np.array(keep)
 for name, xs in X.items():
     p = ens.predict_proba(np.stack(xs))[:, 1]
     ok = (p > 0.5) == (keep[:, 1] == 1)
-    print(f"{name:27}", " ".join(f"tilt {tt}: {100*ok[keep[:,0]==tt].mean():.1f} %" for tt in (0, 20, 45)), f"| all {100*ok.mean():.1f} % of {len(ok)}")
+    print(f"{name:33}", " ".join(f"tilt {tt}: {100*ok[keep[:,0]==tt].mean():.1f} %" for tt in (0, 20, 45)), f"| all {100*ok.mean():.1f} % of {len(ok)}")
