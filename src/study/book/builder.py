@@ -488,7 +488,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         if timings:
             record = {"preset": preset, "device": device, "wall_seconds": round(time.perf_counter() - started, 3),
                       "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages,
-                      "runs": plan_totals(root)}
+                      "runs": plan_totals(root),
+                      "runs_by_chapter": cluster.plan_by_part([ch.plan_part for ch in chapters(root)])}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
             results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
