@@ -62,8 +62,8 @@ def read(data_dir: str | Path) -> Recommended:
     path = Path(data_dir) / FILE
     if not path.is_file():
         raise ModelError(f"no --model given and no recommended model in {Path(data_dir)}: build the book there "
-                         "('make book', or 'study book --data-dir DIR'), or train a Z model with "
-                         "'study train --dims z --out DIR' and pass --model DIR")
+                         "('make book'; a book built with --data-dir DIR keeps it in DIR: pass the same --data-dir), "
+                         "or train a Z model with 'study train --dims z --out DIR' and pass --model DIR")
     try:
         body = json.loads(path.read_text())
         if body.get("format") != FORMAT:
