@@ -299,7 +299,7 @@ def untrainable_words(cells: dict[Dims, Cells], cfg: TrainConfig, fps: float, la
     """The 2 x 2's cells whose runs failed to train, and why, computed: a truncated cell's gradient reaches only the
     last ``cfg.truncation`` frames, where ``moving`` % of test objects still move; a constant start keeps
     ``sigmoid(forget_bias)`` of its state per frame, so of the first second's bounces, ``(last - 1) * fps`` frames
-    before the answer, :func:`memory_left` is left. '' when every run trained."""
+    before the answer, :func:`memory_left` is left. A sentence saying so when every run trained."""
     failed = [(d, t, f, r.n_failed, len(r)) for d, c in cells.items() for (t, f), r in c.runs.items() if r.n_failed]
     if not failed:
         return f"Every run of the 2 × 2 at {last:g} s trained."
@@ -311,8 +311,8 @@ def untrainable_words(cells: dict[Dims, Cells], cfg: TrainConfig, fps: float, la
         why.append(f"a truncated run's gradient reaches only the last {cfg.truncation} frames, where only {moving:.1f} "
                    "% of the test objects still move, so the answer at the last frame has almost nothing to learn from")
     if any(f == "constant" for _, _, f, _, _ in failed):
-        keep = 1.0 / (1.0 + math.exp(-cfg.forget_bias))
-        why.append(f"forget gates that start at a constant bias of {cfg.forget_bias:g} keep {keep:.2f} of the state per "
+        why.append(f"forget gates that start at a constant bias of {cfg.forget_bias:g} keep "
+                   f"{memory_left(cfg.forget_bias, 1):.2f} of the state per "
                    f"frame, so of a bounce in the first second, {frames} frames before the answer, "
                    f"{memory_left(cfg.forget_bias, frames):.0e} is left at the start of training")
     return (f"Runs that failed to train in the 2 × 2 at {last:g} s (each stayed on the coin's plateau): {where}. "
