@@ -548,3 +548,18 @@ def test_a_chapter_stops_for_runs_only_when_its_ticket_lists_them(tmp_path: Path
     root = write_book(tmp_path, {"named": NAMED_PENDING}, "format: jb-book\nroot: book/named\n")
     with pytest.raises(ChapterError, match="Pending: listed nothing"):
         book.build(root, "smoke", force=False, only=None, html=False)
+
+
+def test_the_build_loop_waits_only_on_what_is_not_done():
+    """A done future in the wait set ends every wait at once: the builder's loop would spin a core at 100 % while a
+    stopped chapter waits for its other runs (the first cold paper build of the EMA recipe did, for hours)."""
+    from concurrent.futures import Future
+
+    from study.book.builder import _to_await
+
+    done, busy, chapter = Future(), Future(), Future()
+    done.set_result([])
+    waiting = {"table1": (None, [done, busy], (2, 2), 0.0)}
+    assert _to_await({chapter: None}, waiting) == {chapter, busy}
+    busy.set_result([])
+    assert _to_await({}, waiting) == set()

@@ -159,3 +159,20 @@ def test_the_figure_draws_both_inputs_with_failed_runs_marked(result):
     line = fig.axes[1].get_lines()[0]
     assert list(line.get_xdata()) == [0.5, 1.0, 1.5] and list(line.get_ydata()) == [50.0, 100.0, 50.0]
     plt.close(fig)
+
+
+def test_the_2x2_says_which_cells_cannot_train_and_why_in_numbers():
+    cfg = TrainConfig(dims="z", length=6.0, truncation=90, forget_bias=1.0)
+
+    def runs(failed: int, n: int = 3) -> Runs:
+        return Runs(Run(cfg, 0.5, 0.69, 30, 0, 1.0, i < failed) for i in range(n))
+
+    trained = {(t, f): runs(0) for t in ("truncated", "whole") for f in ("constant", "chrono")}
+    assert length.untrainable_words({"z": length.Cells(trained)}, cfg, 30.0, 6.0, 2.5) == \
+        "Every run of the 2 × 2 at 6 s trained."
+    cells = {"z": length.Cells({**trained, ("whole", "constant"): runs(3), ("truncated", "chrono"): runs(1)})}
+    words = length.untrainable_words(cells, cfg, 30.0, 6.0, 2.5)
+    assert "Z only, whole input, constant start: 3 of 3" in words and "Z only, truncated, chrono start: 1 of 3" in words
+    assert "only the last 90 frames, where only 2.5 % of the test objects still move" in words
+    assert "keep 0.73 of the state per frame" in words and "150 frames before the answer" in words
+    assert f"{length.memory_left(1.0, 150):.0e}" in words and length.memory_left(1.0, 150) < 1e-19

@@ -90,6 +90,9 @@ def test_the_run_closure_holds_what_makes_a_record_and_the_engines_stay_apart():
     assert "simulate/bullet.py" not in mujoco and "simulate/mujoco_sim.py" not in bullet
     assert {"simulate/config.py", "simulate/contact.py"} <= mujoco & bullet
     assert "simulate/contact.py" in set(cache.closure(cache.PRODUCERS["video"][0])), "a throw's damping"
+    for product in ("video", "tracker-error"):
+        stray = [f for f in cache.closure(cache.PRODUCERS[product][0]) if f.startswith(("runs/", "learn/", "book/"))]
+        assert not stray, f"{product}: training or build code {stray} in a render's key re-renders on every edit to it"
 
 
 def test_a_function_local_import_is_in_the_closure(tmp_path):

@@ -92,7 +92,13 @@ def test_the_plan_counts_distinct_models_and_sums_their_training_time(tmp_path, 
     records.record_path(tmp_path, key).parent.mkdir(parents=True)
     records.record_path(tmp_path, key).write_text(json.dumps({"train_seconds": 2.5, "epochs_run": 7}))
     assert cluster.plan_totals([tmp_path / "plan.jsonl", tmp_path / "absent.jsonl"]) == {
-        "models": 5.0, "cpu_seconds": 2.5, "epochs": 7.0}
+        "models": 5.0, "cpu_seconds": 2.5, "epochs": 7.0, "failed": 0.0}
+    other = schedule.Plan(tmp_path / "other.jsonl")  # a second chapter asks for one model of the first and one more
+    other.add(ds, dataclasses.replace(cfg, seed=9), tmp_path, test=True)
+    other.add(ds, dataclasses.replace(cfg, seed=10), tmp_path, test=True)
+    by = cluster.plan_by_part([tmp_path / "plan.jsonl", tmp_path / "other.jsonl"])
+    assert {k: v["models"] for k, v in by.items()} == {"plan": 5.0, "other": 1.0}  # each model counted once
+    assert by["plan"]["epochs"] == 7.0 and by["other"]["epochs"] == 0.0
     records.record_path(tmp_path, key).write_text(json.dumps({"train_seconds": 2.5, "cpu_seconds": 4.0,
                                                               "epochs_run": 7}))
     assert cluster.plan_totals([tmp_path / "plan.jsonl"])["cpu_seconds"] == 4.0  # process time where it was kept

@@ -488,7 +488,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         if timings:
             record = {"preset": preset, "device": device, "wall_seconds": round(time.perf_counter() - started, 3),
                       "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages,
-                      "runs": plan_totals(root)}
+                      "runs": plan_totals(root),
+                      "runs_by_chapter": cluster.plan_by_part([ch.plan_part for ch in chapters(root)])}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
             results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
@@ -556,8 +557,7 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
                     tries[entry[1].stem] = tries.get(entry[1].stem, 0) + 1
                     pending = tmp / f"pending-{entry[1].stem}-{tries[entry[1].stem]}.jsonl"
                     running[pool.submit(attempt, entry, pending)] = (entry, pending, trainer.trained())
-                awaited = [f for _, fs, _, _ in waiting.values() for f in fs]
-                finished, _ = wait([*running, *awaited], return_when=FIRST_COMPLETED)
+                finished, _ = wait(_to_await(running, waiting), return_when=FIRST_COMPLETED)
                 for stem, (entry, fs, n_runs, t0) in list(waiting.items()):
                     if all(f.done() for f in fs):
                         for f in fs:
@@ -588,6 +588,12 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
                     tqdm.write(f"{where}: stopped after {_duration(seconds)} for {len(jobs)} runs "
                                f"({len(trainer.futures) - n_before} new to train)", file=sys.stderr)
                     waiting[ch.stem] = (entry, fs, (len(jobs), len(trainer.futures) - n_before), time.perf_counter())
+
+
+def _to_await(running: dict[Future, Any], waiting: dict[str, tuple]) -> set[Future]:
+    """What the build loop waits on: the chapters executing and the runs the stopped ones wait for that are not
+    done yet. A done future in the set would end every wait at once: the loop would spin, a core busy for nothing."""
+    return set(running) | {f for _, fs, _, _ in waiting.values() for f in fs if not f.done()}
 
 
 def plan_totals(root: Path) -> dict[str, float]:

@@ -20,6 +20,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -215,6 +216,8 @@ class Length:
     """Share of test objects still moving in the last truncation frames of the longest input, percent."""
     control_last: float
     """The longest input, seconds."""
+    fps: float = 30.0
+    """Frames per second of the data set."""
 
     @property
     def xyz_best_len(self) -> float:
@@ -269,6 +272,12 @@ class Length:
     def control_verdict(self) -> str:
         return " ".join(_fading_words(d, c, self.numbers.factorial[d].vanishing) for d, c in self.cells.items())
 
+    @property
+    def untrainable(self) -> str:
+        """Which cells of the 2 x 2 have runs that failed to train, and why they cannot, in numbers
+        (:func:`untrainable_words`)."""
+        return untrainable_words(self.cells, self.config, self.fps, self.control_last, self.moving_last)
+
 
 _FADES = {
     "reproduced": "with the gradient reaching every frame the spanning memory still adds accuracy, as fading "
@@ -278,6 +287,36 @@ _FADES = {
     "inconclusive": "whether the spanning memory still adds accuracy once the gradient reaches every frame, the "
                     "intervals cannot say",
 }
+
+
+def memory_left(forget_bias: float, frames: int) -> float:
+    """The share of its state an LSTM whose forget gates sit at their constant start (``sigmoid(forget_bias)`` per
+    frame) keeps over ``frames`` frames: what reaches the last frame of something seen that long before."""
+    return (1.0 / (1.0 + math.exp(-forget_bias))) ** frames
+
+
+def untrainable_words(cells: dict[Dims, Cells], cfg: TrainConfig, fps: float, last: float, moving: float) -> str:
+    """The 2 x 2's cells whose runs failed to train, and why, computed: a truncated cell's gradient reaches only the
+    last ``cfg.truncation`` frames, where ``moving`` % of test objects still move; a constant start keeps
+    ``sigmoid(forget_bias)`` of its state per frame, so of the first second's bounces, ``(last - 1) * fps`` frames
+    before the answer, :func:`memory_left` is left. A sentence saying so when every run trained."""
+    failed = [(d, t, f, r.n_failed, len(r)) for d, c in cells.items() for (t, f), r in c.runs.items() if r.n_failed]
+    if not failed:
+        return f"Every run of the 2 × 2 at {last:g} s trained."
+    where = "; ".join(f"{NAMES[d]}, {'truncated' if t == 'truncated' else 'whole input'}, {f} start: {n} of {k}"
+                      for d, t, f, n, k in failed)
+    frames = round((last - 1.0) * fps)
+    why = []
+    if any(t == "truncated" for _, t, _, _, _ in failed):
+        why.append(f"a truncated run's gradient reaches only the last {cfg.truncation} frames, where only {moving:.1f} "
+                   "% of the test objects still move, so the answer at the last frame has almost nothing to learn from")
+    if any(f == "constant" for _, _, f, _, _ in failed):
+        why.append(f"forget gates that start at a constant bias of {cfg.forget_bias:g} keep "
+                   f"{memory_left(cfg.forget_bias, 1):.2f} of the state per "
+                   f"frame, so of a bounce in the first second, {frames} frames before the answer, "
+                   f"{memory_left(cfg.forget_bias, frames):.0e} is left at the start of training")
+    return (f"Runs that failed to train in the 2 × 2 at {last:g} s (each stayed on the coin's plateau): {where}. "
+            f"They cannot, for a reason the numbers give: {'; and '.join(why)}.")
 
 
 def _fading_words(d: Dims, c: Cells, vanishing: Number) -> str:
@@ -397,4 +436,4 @@ def compute(runner: Runner, cfg: TrainConfig | None = None) -> Length:
         numbers, cfg, s, effects, cells, window, _length_table(s, p.lengths, ds.fps), window_table, control_table,
         n_lengths=len(p.lengths), n_len_seeds=len(p.length_seeds), trunc=cfg.truncation, n_failed=s.runs.n_failed,
         n_runs=len(s.runs), failed_where="; ".join(f"{d} at {L:g} s" for d, L in failed) or "none", window_why=why,
-        moving_last=100 * still_moving(ds, cfg, [last])[last], control_last=last)
+        moving_last=100 * still_moving(ds, cfg, [last])[last], control_last=last, fps=ds.fps)

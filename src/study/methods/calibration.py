@@ -40,7 +40,7 @@ def rendered(runner: Runner) -> tuple[list[videos.Video], Any]:
     """The real-world chapter's rendered throws at the data's frame rate, as long as Table 1's input (the
     videos the tracker is calibrated on), rendered once."""
     p = runner.preset
-    return videos.book_set(p.name, runner.fps, p.length, runner.render_seed, runner.data_dir)
+    return videos.book_set(p.name, p.videos_per_class, p.render_shadows, runner.fps, p.length, runner.render_seed, runner.data_dir)
 
 
 def tracker_error(runner: Runner) -> TrackerError:
@@ -75,7 +75,7 @@ def development_rendered(runner: Runner) -> list[videos.Video]:
     """Throws rendered as the book's are (:func:`rendered`), from :data:`DEVELOPMENT_RENDER_SEED`: what the
     tracker's settings and its error model are chosen on, never the book's."""
     p = runner.preset
-    shown, _ = videos.book_set(p.name, runner.fps, p.length, DEVELOPMENT_RENDER_SEED, runner.data_dir)
+    shown, _ = videos.book_set(p.name, p.videos_per_class, p.render_shadows, runner.fps, p.length, DEVELOPMENT_RENDER_SEED, runner.data_dir)
     return shown
 
 

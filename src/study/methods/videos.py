@@ -25,7 +25,6 @@ from study import CLASSES
 from study.core import cache, datadir
 from study.core.errors import ConfigError, DataError
 from study.core.progress import Progress
-from study.runs.presets import preset
 from study.see import render
 from study.simulate import synth
 
@@ -173,14 +172,17 @@ def render_set(
     return videos
 
 
-def book_set(preset_name: str, fps: float, duration: float, render_seed: int = 1000, data_dir: str | Path | None = None,
-             progress: bool = False) -> tuple[list[Video], render.RenderConfig]:
+def book_set(preset_name: str, per_class: int, shadows: bool, fps: float, duration: float, render_seed: int = 1000,
+             data_dir: str | Path | None = None, progress: bool = False) -> tuple[list[Video], render.RenderConfig]:
     """The rendered throws the book uses (the real-world chapter's, which the cue chapter measures the
-    tracker on): the preset's ``videos_per_class`` of each class at 320 x 240, ``fps``, ``duration``
-    seconds, with motion blur, sensor noise and JPEG loss; rendered once, then read from the cache."""
-    p = preset(preset_name)
+    tracker on): ``per_class`` throws of each class drawn from preset ``preset_name``'s priors (a preset's
+    ``videos_per_class``), at 320 x 240, ``fps``, ``duration`` seconds, with motion blur, sensor noise, JPEG loss
+    and shadows if ``shadows``; rendered once, then read from the cache.
+
+    The preset's sizes are passed in rather than read here: this module's code is part of every render's key, and
+    ``study.runs`` (the training scheduler) is not render code."""
     rcfg = render.RenderConfig(width=320, height=240, fps=fps, duration=duration, blur_subframes=2, noise_std=2.0,
-                               jpeg_quality=85, shadows=p.render_shadows, seed=render_seed)
+                               jpeg_quality=85, shadows=shadows, seed=render_seed)
     cfg = synth.SynthConfig.preset(preset_name)
-    videos = render_set(cfg, p.videos_per_class, render_seed, datadir.resolve(data_dir) / "realworld", rcfg, progress=progress)
+    videos = render_set(cfg, per_class, render_seed, datadir.resolve(data_dir) / "realworld", rcfg, progress=progress)
     return videos, rcfg

@@ -41,22 +41,42 @@ def local_cluster(workers: int) -> Any:
                         dashboard_address=None)
 
 
-def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
-    """The distinct models listed in the plan files ``parts`` (``models``), the process CPU seconds their records
-    took to train (``cpu_seconds``: each record's ``cpu_seconds``, or its wall ``train_seconds`` if it was made
-    before that was kept) and the epochs they ran (``epochs``); a record that is missing counts nothing."""
-    models: dict[str, str] = {}
+def _planned(parts: Sequence[Path]) -> dict[str, tuple[str, Path]]:
+    """Each distinct model of the plan files ``parts``: its record's path and the first part that lists it."""
+    models: dict[str, tuple[str, Path]] = {}
     for part in parts:
         if not part.is_file():
             continue
         for line in part.read_text().splitlines():
             with contextlib.suppress(ValueError, KeyError, TypeError):
                 entry = json.loads(line)
-                models.setdefault(str(entry["model"]), str(entry["record"]))
-    seconds = epochs = 0.0
-    for record in models.values():
+                models.setdefault(str(entry["model"]), (str(entry["record"]), part))
+    return models
+
+
+def _totals(records: Sequence[str]) -> dict[str, float]:
+    seconds = epochs = failed = 0.0
+    for record in records:
         with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
             rec = json.loads(Path(record).read_text())
             seconds += float(rec.get("cpu_seconds", rec["train_seconds"]))
             epochs += float(rec.get("epochs_run", 0))
-    return {"models": float(len(models)), "cpu_seconds": seconds, "epochs": epochs}
+            failed += bool(rec.get("failed"))
+    return {"models": float(len(records)), "cpu_seconds": seconds, "epochs": epochs, "failed": failed}
+
+
+def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
+    """The distinct models listed in the plan files ``parts`` (``models``), the process CPU seconds their records
+    took to train (``cpu_seconds``: each record's ``cpu_seconds``, or its wall ``train_seconds`` if it was made
+    before that was kept), the epochs they ran (``epochs``) and how many failed to train (``failed``); a record
+    that is missing counts nothing but its model."""
+    return _totals([record for record, _ in _planned(parts).values()])
+
+
+def plan_by_part(parts: Sequence[Path]) -> dict[str, dict[str, float]]:
+    """:func:`plan_totals` of each plan file (by its name without suffix: the chapter), each model counted in the
+    first part that lists it, so the parts add up to the whole: where a build's training time goes."""
+    by: dict[Path, list[str]] = {p: [] for p in parts}
+    for record, part in _planned(parts).values():
+        by[part].append(record)
+    return {p.stem: _totals(records) for p, records in by.items() if records}

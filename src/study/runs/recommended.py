@@ -10,6 +10,7 @@ mean of its seeds' probabilities (``study.learn.trained.Ensemble``).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -46,12 +47,11 @@ class Recommended:
 
 def save(data_dir: str | Path, name: str, model_dirs: Sequence[Path], val: Interval, preset: str) -> Path:
     """Write ``data_dir/recommended.json`` (atomically) and return its path."""
-    root = Path(data_dir)
-    rel = [str(Path(d).resolve().relative_to(root.resolve())) if Path(d).resolve().is_relative_to(root.resolve())
-           else str(Path(d).resolve()) for d in model_dirs]
-    body = {"format": FORMAT, "name": name, "models": rel, "preset": preset,
-            "val": {"value": val.value, "lo": val.lo, "hi": val.hi, "method": val.method}}
-    path = root / FILE
+    root = Path(data_dir).resolve()
+    dirs = [Path(d).resolve() for d in model_dirs]
+    rel = [str(d.relative_to(root) if d.is_relative_to(root) else d) for d in dirs]
+    body = {"format": FORMAT, "name": name, "models": rel, "preset": preset, "val": dataclasses.asdict(val)}
+    path = Path(data_dir) / FILE
     write_text_atomic(path, json.dumps(body, indent=1) + "\n")
     return path
 
@@ -62,14 +62,13 @@ def read(data_dir: str | Path) -> Recommended:
     path = Path(data_dir) / FILE
     if not path.is_file():
         raise ModelError(f"no --model given and no recommended model in {Path(data_dir)}: build the book there "
-                         "('make book', or 'study book --data-dir DIR'), or train a Z model with "
-                         "'study train --dims z --out DIR' and pass --model DIR")
+                         "('make book'; a book built with --data-dir DIR keeps it in DIR: pass the same --data-dir), "
+                         "or train a Z model with 'study train --dims z --out DIR' and pass --model DIR")
     try:
         body = json.loads(path.read_text())
         if body.get("format") != FORMAT:
             raise ValueError(f"format {body.get('format')!r}")
-        val = Interval(float(body["val"]["value"]), float(body["val"]["lo"]), float(body["val"]["hi"]),
-                       str(body["val"]["method"]))
+        val = Interval(**body["val"])
         models = tuple((Path(data_dir) / m) if not Path(m).is_absolute() else Path(m) for m in body["models"])
         if not models:
             raise ValueError("no models listed")
