@@ -21,6 +21,7 @@ from study.learn.trained import Ensemble
 from study.methods import videos
 from study.see import geometry as G
 from study.see import render
+from study.see.size import apparent_size
 from study.simulate import synth
 
 if len(sys.argv) > 2:
@@ -41,7 +42,7 @@ for i in range(N):
     states.append(render.simulate(model, qpos, qvel, 90 * spf)[::spf][:90]); labels.append(int(params["label"][i]))
 labels = np.array(labels)
 rng = np.random.default_rng(0)
-size = G.apparent_size("box", (0.2,)*3)
+size = apparent_size("box", (0.2,)*3)
 t = np.arange(90)/30
 def inp(z):
     x = np.zeros((90, 3), np.float32); x[:, 2] = z; return x

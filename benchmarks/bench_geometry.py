@@ -28,6 +28,7 @@ import numpy as np
 from study.methods import videos
 from study.see import geometry, render
 from study.see.camera import Camera
+from study.see.size import apparent_size
 from study.simulate import synth
 
 WIDTH, HEIGHT, FPS, FRAMES = 640, 480, 30.0, 90
@@ -93,7 +94,7 @@ def main() -> None:
     ap.add_argument("--throws", type=int, default=6, help="throws per tilt family")
     ap.add_argument("--seed", type=int, default=0, help="seed of the cameras and the noise")
     a = ap.parse_args()
-    size = geometry.apparent_size("box", (0.2, 0.2, 0.2))
+    size = apparent_size("box", (0.2, 0.2, 0.2))
     states = throws(a.throws)
     rng = np.random.default_rng(a.seed)
     t = np.arange(FRAMES) / FPS

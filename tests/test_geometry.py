@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from study.see import geometry
+from study.see import geometry, size
 from study.see.camera import Camera
 
 W, H, FPS, D = 640, 480, 30.0, 0.1
@@ -61,5 +61,5 @@ def test_a_clip_without_a_free_flight_or_without_the_ground_says_which():
 
 
 def test_a_box_is_sized_by_its_mean_silhouette():
-    assert geometry.apparent_size("sphere", (0.067,)) == 0.067
-    assert geometry.apparent_size("box", (0.2, 0.2, 0.2)) == pytest.approx(0.2 * math.sqrt(6 / math.pi))
+    assert size.apparent_size("sphere", (0.067,)) == 0.067
+    assert size.apparent_size("box", (0.2, 0.2, 0.2)) == pytest.approx(0.2 * math.sqrt(6 / math.pi))

@@ -28,7 +28,7 @@ from study.core.progress import Progress
 from study.methods import videos
 from study.see import render
 from study.see.camera import Camera
-from study.see.geometry import apparent_size
+from study.see.size import apparent_size
 
 FAMILIES: dict[str, dict[str, tuple[float, float]]] = {
     "square-on": {"height": (0.8, 1.5), "tilt": (0.0, 10.0), "yaw": (0.0, 15.0), "distance": (3.0, 5.0)},
@@ -226,7 +226,7 @@ def synth_split(cfg, seed: int) -> dict[str, np.ndarray]:
 
 
 def _object_size(cfg) -> float:
-    """The object's size as the user's path reads it (``study.see.geometry.apparent_size``), metres."""
+    """The object's size as the user's path reads it (``study.see.size.apparent_size``), metres."""
     return apparent_size(cfg.shape.kind, tuple(2 * s for s in cfg.shape.size) if cfg.shape.kind == "box"
                          else (2 * cfg.shape.size[0],) if cfg.shape.kind == "sphere"
                          else (2 * cfg.shape.size[0], 2 * cfg.shape.size[1]))

@@ -18,7 +18,7 @@ view), then turns every frame's image position into a height above the ground: t
 the ground plane, or between them interpolated. :class:`Geometry` reports what was assumed and found; a video
 without a free flight or without a frame on the ground raises :class:`GeometryError` saying which.
 
-Object size: the diameter of the disc whose area is the object's *average* silhouette (:func:`apparent_size`): a
+Object size: the diameter of the disc whose area is the object's *average* silhouette (``study.see.size.apparent_size``): a
 ball's diameter; for a box, ``sqrt(surface / pi)`` (Cauchy: a convex body's mean projected area is a quarter of
 its surface), 1.38 edges for a cube.
 
@@ -56,20 +56,6 @@ MIN_ARC = 5
 
 class GeometryError(TrajectoryError):
     """The video does not show what the geometry needs: a free flight, or the object on the ground."""
-
-
-def apparent_size(kind: str, size: tuple[float, ...]) -> float:
-    """The object size :func:`recover` expects, metres, of a ``kind`` ('sphere': (diameter,); 'box': its three
-    edges; 'cylinder': (diameter, height)): the diameter of a disc with the object's mean silhouette area."""
-    if kind == "sphere":
-        return float(size[0])
-    if kind == "box":
-        a, b, c = size
-        return math.sqrt(2 * (a * b + b * c + c * a) / math.pi)
-    if kind == "cylinder":
-        d, h = size
-        return math.sqrt((math.pi * d * d / 2 + math.pi * d * h) / math.pi)
-    raise TrajectoryError(f"apparent_size: kind {kind!r} is unknown; use 'sphere', 'box' or 'cylinder'")
 
 
 @dataclass(frozen=True)
@@ -222,7 +208,7 @@ def recover(t: np.ndarray, u: np.ndarray, v: np.ndarray, diam: np.ndarray, width
 
     ``t`` (n,) seconds; ``u``, ``v`` (n,) pixels; ``diam`` (n,) the blob's equivalent-disc diameter, pixels (NaN
     where not measured: filled from its neighbours); ``width`` x ``height`` the frame, pixels; ``object_size``
-    metres (:func:`apparent_size`); ``rest_height`` the centre's height resting on the ground, metres. Returns
+    metres (``study.see.size.apparent_size``); ``rest_height`` the centre's height resting on the ground, metres. Returns
     (n,) float64 heights (NaN where ``u`` or ``v`` is) and the :class:`Geometry`. Raises :class:`GeometryError`
     for a video without a free flight of :data:`MIN_ARC` frames or without a frame on the ground."""
     check_range("object_size (metres)", object_size, 0.0, 10.0, lo_open=True)
