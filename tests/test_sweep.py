@@ -4,7 +4,7 @@ the code's pinhole sees it, and a smoke sweep rendered and cached."""
 import numpy as np
 import pytest
 
-from study.methods import sweep, videos
+from study.methods import camera_cost, sweep, videos
 from study.see import render
 from study.simulate import synth
 
@@ -35,17 +35,53 @@ def test_the_scene_camera_projects_as_the_shots_pinhole():
     np.testing.assert_allclose(mine, cam.project(path[::50]), atol=1e-6)
 
 
+SMOKE = {"per_family": 1, "seed": 2000, "progress": False, "frame_scale": 0.5, "duration": 1.0}
+"""A smoke sweep: one clip a family, half-size frames, 1-s clips."""
+
+
+@pytest.fixture(scope="module")
+def smoke(tmp_path_factory):
+    out = tmp_path_factory.mktemp("sweep")
+    return synth.SynthConfig.preset("smoke"), sweep.sweep_set(synth.SynthConfig.preset("smoke"), out_dir=out, **SMOKE), out
+
+
 @pytest.mark.slow
-def test_a_smoke_sweep_renders_each_family_once_and_reads_it_back(tmp_path):
-    cfg = synth.SynthConfig.preset("smoke")
-    clips = sweep.sweep_set(cfg, per_family=1, seed=2000, out_dir=tmp_path, progress=False, frame_scale=0.25,
-                             duration=1.0)
+def test_a_smoke_sweep_renders_each_family_once_and_reads_it_back(smoke):
+    cfg, clips, out = smoke
     assert [c.shot.family for c in clips] == list(sweep.FAMILIES)
     assert [c.video.label for c in clips] == ["light"] * 4  # one a family: the first class
     assert all(c.video.path.is_file() and c.video.truth.is_file() for c in clips)
     stamp = [c.video.path.stat().st_mtime_ns for c in clips]
-    again = sweep.sweep_set(cfg, per_family=1, seed=2000, out_dir=tmp_path, progress=False, frame_scale=0.25,
-                             duration=1.0)
+    again = sweep.sweep_set(cfg, out_dir=out, **SMOKE)
     assert [c.video.path.stat().st_mtime_ns for c in again] == stamp
     truth = render.read_truth(clips[0].video.truth)
     assert (truth["z"] > 0).all()
+
+
+class _Says:
+    """A stand-in model that answers one class whatever it reads."""
+
+    fps, n_frames = 30.0, 30
+
+    def __init__(self, heavy: bool):
+        self.p = np.array([[0.0, 1.0]]) if heavy else np.array([[1.0, 0.0]])
+
+    def predict_proba(self, x):
+        return self.p
+
+
+@pytest.mark.slow
+def test_the_camera_cost_scores_every_path_on_the_same_clips(smoke):
+    cfg, clips, _ = smoke
+    res = camera_cost.measure([_Says(False), _Says(True)], clips, camera_cost.shape_of(cfg), progress=False)
+    assert list(res) == ["all", *sweep.FAMILIES]
+    exact = res["all"]["exact"]
+    assert exact.accuracy.value == 0.5 and exact.cost is None and exact.rms_mm == 0  # one seed right on each clip
+    for name in camera_cost.PATHS:
+        r = res["all"][name]
+        answered = 1 - r.no_heights / len(clips)
+        assert r.accuracy.value == pytest.approx(0.5 * answered)
+        assert r.cost.value == pytest.approx(exact.accuracy.value - r.accuracy.value)
+    print({k: (r.rms_mm, r.rms_centred_mm, r.no_heights) for k, r in res["all"].items()})
+    assert res["all"]["rest size"].no_heights == 0, "every smoke clip is tracked"
+    assert res["all"]["mean silhouette"].rms_centred_mm < 100, "the heights follow the throw"

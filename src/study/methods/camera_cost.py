@@ -1,0 +1,193 @@
+"""What a user's camera costs the answer: the sweep's clips (``study.methods.sweep``) tracked and turned into
+heights by each path a user without a calibrated camera has, classified, beside the same throws' exact heights.
+
+A path reads only the video and what a user knows (the object's colour, shape and size):
+
+- ``rest size``: one scale, the object's size over its blob's diameter at rest (``study.see.gaps.set_scale``:
+  today's ``study classify VIDEO --object-size``), the ground at the lowest centre position;
+- ``mean silhouette``: one scale, the object's mean-silhouette size (``study.see.size.apparent_size``) over the
+  blob's root-mean-square diameter over every measured frame (a tumbling box shows every side on average);
+- ``geometry``: the camera's tilt, height and focal length fitted with gravity as the ruler
+  (``study.see.geometry.recover``).
+
+The exact path classifies the renderer's true heights: the camera's cost is the exact path's accuracy minus a
+user path's, on the same clips and seeds (a paired bootstrap). A clip a path cannot turn into heights (the object
+lost, no free flight) gets no answer and counts as a miss; :class:`PathResult` says how many.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from study.core.errors import StudyError
+from study.core.progress import Progress
+from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
+from study.methods.sweep import Clip
+from study.see import geometry, render, track
+from study.see.gaps import set_scale
+from study.see.size import apparent_size
+from study.see.trajectory import Trajectory
+
+PATHS = ("rest size", "mean silhouette", "geometry")
+"""The user's paths from pixels to metres, in the order the tables show them."""
+
+
+Shape = tuple[str, tuple[float, ...]]
+"""An object's kind ('sphere', 'box', 'cylinder') and its dimensions, metres (``study.see.size.apparent_size``)."""
+
+
+def shape_of(cfg) -> Shape:
+    """The :data:`Shape` of a ``synth.SynthConfig``'s object (its ``shape`` holds half-sizes)."""
+    full = tuple(2 * float(s) for s in cfg.shape.size)
+    return cfg.shape.kind, full[:3] if cfg.shape.kind == "box" else full[:1] if cfg.shape.kind == "sphere" else full[:2]
+
+
+def face_size(kind: str, dims: tuple[float, ...]) -> float:
+    """The diameter, metres, of the disc with the area of the silhouette the object shows side-on at rest: what
+    the book's renders have passed as ``object_size`` (a box resting on its two largest edges' face seen square-on;
+    a cylinder on its side)."""
+    if kind == "box":
+        a, b = sorted(dims)[1:]
+        return float(np.sqrt(4 * a * b / np.pi))
+    if kind == "cylinder":
+        return float(np.sqrt(4 * dims[0] * dims[1] / np.pi))
+    return float(dims[0])
+
+
+def _rest_size(traj: Trajectory, kind: str, dims: tuple[float, ...]) -> Trajectory:
+    return set_scale(traj, object_size=face_size(kind, dims))
+
+
+def _mean_silhouette(traj: Trajectory, kind: str, dims: tuple[float, ...]) -> Trajectory:
+    d = traj.diameter[traj.measured]
+    rms = float(np.sqrt(np.nanmean(d**2)))
+    return set_scale(traj, metres_per_pixel=apparent_size(kind, dims) / rms)
+
+
+def _geometry(traj: Trajectory, kind: str, dims: tuple[float, ...]) -> Trajectory:
+    z, _ = geometry.recover(traj.t, traj.u, traj.v, traj.diameter, traj.width, traj.height_px,
+                            apparent_size(kind, dims), 0.0, source=traj.source)
+    return replace(traj, z=z, ground_z=0.0, units="m")
+
+
+SCALE: dict[str, Callable[[Trajectory, str, tuple[float, ...]], Trajectory]] = {
+    "rest size": _rest_size, "mean silhouette": _mean_silhouette, "geometry": _geometry}
+"""Each path: a pixel trajectory and the object's shape -> the trajectory with heights in metres."""
+
+
+@dataclass(frozen=True)
+class Heights:
+    """One clip's centre heights above its rest height, metres, frame by frame (NaN where a path has none)."""
+
+    exact: np.ndarray
+    """(n,) the renderer's truth."""
+    paths: dict[str, np.ndarray | str]
+    """Path name -> (n,) its heights, or why it has none."""
+    tracks: dict[str, Trajectory]
+    """Path name -> the trajectory its heights came from (what the model reads)."""
+
+
+def heights(clip: Clip, shape: Shape) -> Heights:
+    """Track ``clip`` once (pixels) and turn it into heights by every path of :data:`PATHS`, for an object of
+    ``shape``."""
+    v = clip.video
+    truth = render.read_truth(v.truth)
+    rest = v.rest_height
+    exact = truth["z"] - rest
+    kind, dims = shape
+    paths: dict[str, np.ndarray | str] = {}
+    tracks: dict[str, Trajectory] = {}
+    try:
+        px = track.track_video(v.path, track.TrackConfig(color=v.color, progress=False))
+    except StudyError as e:
+        return Heights(exact, dict.fromkeys(PATHS, str(e)), {})
+    for name in PATHS:
+        try:
+            t = SCALE[name](px, kind, dims)
+        except StudyError as e:
+            paths[name] = str(e)
+            continue
+        tracks[name] = t
+        h = np.where(t.status > 0, t.height, np.nan)
+        paths[name] = h[: len(exact)] if len(h) >= len(exact) else np.pad(h, (0, len(exact) - len(h)),
+                                                                           constant_values=np.nan)
+    return Heights(exact, paths, tracks)
+
+
+def exact_input(clip: Clip, fps: float, n_frames: int) -> np.ndarray:
+    """(n_frames, 3) float32: the clip's true centre heights as the model reads them (z only), resampled to
+    ``fps``, metres."""
+    truth = render.read_truth(clip.video.truth)
+    n = len(truth["t"])
+    traj = Trajectory(t=truth["t"], u=truth["u"], v=truth["v"], status=np.ones(n, np.int8),
+                      segment=np.zeros(n, np.int32), confidence=np.ones(n), diameter=np.full(n, np.nan),
+                      fps=clip.shot.fps, units="m", z=truth["z"], ground_z=clip.video.rest_height)
+    return track.to_model_input(traj, fps, n_frames, rest_height=clip.video.rest_height)
+
+
+@dataclass(frozen=True)
+class PathResult:
+    """One path on a group of clips."""
+
+    accuracy: Interval
+    """Accuracy over the clips and the model's seeds (a clip without heights is a miss)."""
+    cost: Interval | None
+    """The exact path's accuracy minus this one's, paired over clips and seeds (None for the exact path)."""
+    rms_mm: float
+    """Root-mean-square height error over every frame with a height, millimetres."""
+    rms_centred_mm: float
+    """The same after removing each clip's median error (what one offset cannot fix), millimetres."""
+    no_heights: int
+    """Clips the path could not turn into heights."""
+
+
+def measure(members: Sequence, clips: Sequence[Clip], shape: Shape, progress: bool = True
+            ) -> dict[str, dict[str, PathResult]]:
+    """Every path on ``clips`` (of an object of ``shape``) classified by each of ``members`` (trained 'z' models: the seeds of one
+    configuration, each with ``predict_proba``, ``fps`` and ``n_frames``): group ('all' and each family) ->
+    path ('exact' and :data:`PATHS`) -> :class:`PathResult`."""
+    first = members[0]
+    fps, n_frames = first.fps, first.n_frames
+    names = ("exact", *PATHS)
+    correct = {k: np.zeros((len(members), len(clips)), bool) for k in names}
+    errors: dict[str, list[np.ndarray]] = {k: [np.array([])] * len(clips) for k in names}
+    missing = {k: np.zeros(len(clips), bool) for k in names}
+    y = np.array([c.video.label == "heavy" for c in clips])
+    with Progress("camera cost", total=len(clips), show=progress, unit="clip") as bar:
+        for i, clip in enumerate(clips):
+            h = heights(clip, shape)
+            x = {"exact": exact_input(clip, fps, n_frames)}
+            errors["exact"][i] = np.zeros(1)
+            for k in PATHS:
+                got = h.paths[k]
+                if isinstance(got, str):
+                    missing[k][i] = True
+                    continue
+                errors[k][i] = (got - h.exact)[np.isfinite(got)]
+                try:
+                    x[k] = track.to_model_input(h.tracks[k], fps, n_frames, rest_height=clip.video.rest_height)
+                except StudyError:
+                    missing[k][i] = True
+            for s, m in enumerate(members):
+                for k, xi in x.items():
+                    correct[k][s, i] = (float(np.asarray(m.predict_proba(xi[None]))[0, 1]) > 0.5) == y[i]
+            bar.update()
+    groups = {"all": np.ones(len(clips), bool)}
+    for fam in dict.fromkeys(c.shot.family for c in clips):
+        groups[fam] = np.array([c.shot.family == fam for c in clips])
+    out: dict[str, dict[str, PathResult]] = {}
+    for g, sel in groups.items():
+        out[g] = {}
+        for k in names:
+            e = [errors[k][i] for i in np.flatnonzero(sel) if len(errors[k][i])]
+            pooled = np.concatenate(e) if e else np.array([np.nan])
+            centred = np.concatenate([x - np.median(x) for x in e]) if e else np.array([np.nan])
+            out[g][k] = PathResult(
+                bootstrap_accuracy(correct[k][:, sel]),
+                None if k == "exact" else bootstrap_difference(correct["exact"][:, sel], correct[k][:, sel]),
+                1000 * float(np.sqrt(np.mean(pooled**2))), 1000 * float(np.sqrt(np.mean(centred**2))),
+                int(missing[k][sel].sum()))
+    return out
