@@ -28,53 +28,36 @@ from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_differen
 from study.methods.sweep import Clip
 from study.see import geometry, render, track
 from study.see.gaps import set_scale
-from study.see.size import apparent_size
+from study.see.scale import ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 
 PATHS = ("rest size", "mean silhouette", "geometry")
 """The user's paths from pixels to metres, in the order the tables show them."""
 
 
-Shape = tuple[str, tuple[float, ...]]
-"""An object's kind ('sphere', 'box', 'cylinder') and its dimensions, metres (``study.see.size.apparent_size``)."""
-
-
-def shape_of(cfg) -> Shape:
-    """The :data:`Shape` of a ``synth.SynthConfig``'s object (its ``shape`` holds half-sizes)."""
+def shape_of(cfg) -> ObjectShape:
+    """The :class:`~study.see.scale.ObjectShape` of a ``synth.SynthConfig``'s object (its ``shape`` holds
+    half-sizes)."""
     full = tuple(2 * float(s) for s in cfg.shape.size)
-    return cfg.shape.kind, full[:3] if cfg.shape.kind == "box" else full[:1] if cfg.shape.kind == "sphere" else full[:2]
+    n = {"box": 3, "sphere": 1}.get(cfg.shape.kind, 2)
+    return ObjectShape(cfg.shape.kind, full[:n])
 
 
-def face_size(kind: str, dims: tuple[float, ...]) -> float:
-    """The diameter, metres, of the disc with the area of the silhouette the object shows side-on at rest: what
-    the book's renders have passed as ``object_size`` (a box resting on its two largest edges' face seen square-on;
-    a cylinder on its side)."""
-    if kind == "box":
-        a, b = sorted(dims)[1:]
-        return float(np.sqrt(4 * a * b / np.pi))
-    if kind == "cylinder":
-        return float(np.sqrt(4 * dims[0] * dims[1] / np.pi))
-    return float(dims[0])
+def _one_scale(how: str) -> Callable[[Trajectory, ObjectShape], Trajectory]:
+    def scaled(traj: Trajectory, shape: ObjectShape) -> Trajectory:
+        return set_scale(traj, metres_per_pixel=read_scale(traj, shape, how).metres_per_pixel)
+
+    return scaled
 
 
-def _rest_size(traj: Trajectory, kind: str, dims: tuple[float, ...]) -> Trajectory:
-    return set_scale(traj, object_size=face_size(kind, dims))
-
-
-def _mean_silhouette(traj: Trajectory, kind: str, dims: tuple[float, ...]) -> Trajectory:
-    d = traj.diameter[traj.measured]
-    rms = float(np.sqrt(np.nanmean(d**2)))
-    return set_scale(traj, metres_per_pixel=apparent_size(kind, dims) / rms)
-
-
-def _geometry(traj: Trajectory, kind: str, dims: tuple[float, ...]) -> Trajectory:
-    z, _ = geometry.recover(traj.t, traj.u, traj.v, traj.diameter, traj.width, traj.height_px,
-                            apparent_size(kind, dims), 0.0, source=traj.source)
+def _geometry(traj: Trajectory, shape: ObjectShape) -> Trajectory:
+    z, _ = geometry.recover(traj.t, traj.u, traj.v, traj.diameter, traj.width, traj.height_px, shape.mean_size(),
+                            0.0, source=traj.source)
     return replace(traj, z=z, ground_z=0.0, units="m")
 
 
-SCALE: dict[str, Callable[[Trajectory, str, tuple[float, ...]], Trajectory]] = {
-    "rest size": _rest_size, "mean silhouette": _mean_silhouette, "geometry": _geometry}
+SCALE: dict[str, Callable[[Trajectory, ObjectShape], Trajectory]] = {
+    "rest size": _one_scale("rest"), "mean silhouette": _one_scale("mean"), "geometry": _geometry}
 """Each path: a pixel trajectory and the object's shape -> the trajectory with heights in metres."""
 
 
@@ -90,14 +73,13 @@ class Heights:
     """Path name -> the trajectory its heights came from (what the model reads)."""
 
 
-def heights(clip: Clip, shape: Shape) -> Heights:
+def heights(clip: Clip, shape: ObjectShape) -> Heights:
     """Track ``clip`` once (pixels) and turn it into heights by every path of :data:`PATHS`, for an object of
     ``shape``."""
     v = clip.video
     truth = render.read_truth(v.truth)
     rest = v.rest_height
     exact = truth["z"] - rest
-    kind, dims = shape
     paths: dict[str, np.ndarray | str] = {}
     tracks: dict[str, Trajectory] = {}
     try:
@@ -106,7 +88,7 @@ def heights(clip: Clip, shape: Shape) -> Heights:
         return Heights(exact, dict.fromkeys(PATHS, str(e)), {})
     for name in PATHS:
         try:
-            t = SCALE[name](px, kind, dims)
+            t = SCALE[name](px, shape)
         except StudyError as e:
             paths[name] = str(e)
             continue
@@ -144,7 +126,7 @@ class PathResult:
     """Clips the path could not turn into heights."""
 
 
-def measure(members: Sequence, clips: Sequence[Clip], shape: Shape, progress: bool = True
+def measure(members: Sequence, clips: Sequence[Clip], shape: ObjectShape, progress: bool = True
             ) -> dict[str, dict[str, PathResult]]:
     """Every path on ``clips`` (of an object of ``shape``) classified by each of ``members`` (trained 'z' models: the seeds of one
     configuration, each with ``predict_proba``, ``fps`` and ``n_frames``): group ('all' and each family) ->
