@@ -126,13 +126,14 @@ def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, s
                      "--out", str(out), "--no-progress"]) == 0
     capsys.readouterr()
     assert json.loads((out / "config.json").read_text())["inputs"] == "velocity"
-    assert cli.main(["track", str(small_video), "--color", "orange", "--object-size", "0.2", "--out",
+    assert cli.main(["track", str(small_video), "--color", "orange", "--object-size", "0.2", "--object-shape", "box", "--out",
                      str(tmp_path / "t.csv"), "--no-progress"]) == 0
     for source in (tmp_path / "t.csv", small_video):
         assert cli.main(["classify", str(source), "--model", str(out), "--color", "orange", "--object-size", "0.2",
-                         "--no-progress"]) == 0
-        line = capsys.readouterr().out.strip().splitlines()[-1]
+                         "--object-shape", "box", "--scale-from", "mean", "--no-progress"]) == 0
+        line, note = capsys.readouterr().out.strip().splitlines()[-2:]
         assert line.startswith(f"{source}: ") and ("light (p = " in line or "heavy (p = " in line), line
+        assert note.startswith("  assumed: ") and "mm/px" in note and "frames found" in note, note
 
 
 def test_classify_without_a_model_and_without_a_build_says_how_to_get_one(tmp_path, capsys):
@@ -173,3 +174,13 @@ def test_classify_without_a_model_uses_the_builds_recommended_one(tmp_path, data
     shutil.rmtree(moved / "models")
     assert cli.main(["classify", str(csv), "--data-dir", str(moved)]) == 2
     assert "which is gone" in one_error_line(capsys)
+
+
+@pytest.mark.parametrize("args, why", [(["--object-shape", "box", "--object-size", "0.1", "0.2"], "a box takes 1 or 3"),
+                                       (["--object-size", "-0.2"], "sphere size (metres)")])
+def test_a_shape_that_does_not_fit_its_sizes_is_one_line_and_exit_2(tmp_path, capsys, args, why):
+    video = tmp_path / "clip.mp4"
+    video.write_bytes(b"not read: the shape is checked first")
+    rc = cli.main(["track", str(video), "--color", "orange", *args, "--no-progress"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and why in err[0], err
