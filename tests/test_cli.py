@@ -4,6 +4,7 @@ with one line naming the path, exits 2 and leaves nothing behind; `--help` costs
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -120,7 +121,7 @@ def test_help_does_not_import_torch():
 
 
 @pytest.mark.slow  # trains a tiny model and tracks a rendered video
-def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, small_video, capsys):
+def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, small_video, capsys, monkeypatch):
     out = tmp_path / "v"
     assert cli.main(["train", "--data", str(dataset_file), "--length", "0.5", "--epochs", "1", "--inputs", "velocity",
                      "--out", str(out), "--no-progress"]) == 0
@@ -134,6 +135,21 @@ def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, s
         line, note = capsys.readouterr().out.strip().splitlines()[-2:]
         assert line.startswith(f"{source}: ") and ("light (p = " in line or "heavy (p = " in line), line
         assert note.startswith("  assumed: ") and "mm/px" in note and "frames found" in note, note
+    # the user's path reads the video and the flags only: no render truth, no manifest, no camera beside it
+    alone = tmp_path / "alone" / "clip.mp4"
+    alone.parent.mkdir()
+    shutil.copy(small_video, alone)
+    from study.methods import videos
+    from study.see import camera
+
+    def no(*a, **k):
+        raise AssertionError("the user's path read something other than the video and its flags")
+
+    for where, name in ((render, "read_truth"), (videos, "read_manifest"), (camera.Camera, "heights")):
+        monkeypatch.setattr(where, name, no)
+    assert cli.main(["classify", str(alone), "--model", str(out), "--color", "orange", "--object-size", "0.2",
+                     "--object-shape", "box", "--no-progress"]) == 0
+    assert capsys.readouterr().out.startswith(f"{alone}: ")
 
 
 def test_classify_without_a_model_and_without_a_build_says_how_to_get_one(tmp_path, capsys):
