@@ -244,6 +244,18 @@ def _frames(rng, y, S, T):
     return 1 / (1 + np.exp(-(drift + offset + 0.1 * rng.standard_normal((S, len(y), T)))))
 
 
+def test_a_condition_certifies_its_seeds_as_one_classifier_on_their_mean_probability():
+    rng = np.random.default_rng(4)
+    y_cert, y_test = np.repeat([0, 1], 1000), np.repeat([0, 1], 300)
+    x_cert, x_test = _inputs(rng, y_cert, 5), _inputs(rng, y_test, 5)
+    models = [Scored(1.0), Scored(3.0)]
+    c = decision.condition("two seeds", models, x_cert, y_cert, x_test, y_test, 0.01)
+    mean = [np.mean([m.predict_proba(x)[:, 1] for m in models], axis=0) for x in (x_cert, x_test)]
+    want = operating.operating_point(mean[0], y_cert, mean[1], y_test, 0.01)
+    assert c.ensemble == want and want.certified is not None
+    assert c.ensemble.certified not in {s.point.certified for s in c.per_seed}, "neither seed's own threshold"
+
+
 def _chapter(n_cert_per_class: int, unstable: bool = False) -> decision.CarDecision:
     rng = np.random.default_rng(1)
     T, fps, seeds = 12, 10.0, (0, 1)
@@ -283,9 +295,11 @@ def test_a_certifiable_chapter_reports_its_operating_points_under_their_names(ce
             "decision.clear.exact.seed0.share", "decision.clear.exact.seed1.miss", "decision.clear.exact.median_s",
             "decision.choice.val.velocity", "decision.camera.ece_scaled", "decision.certified.points"} <= names
     assert not any(name.endswith(".certifiable") for name in names)
-    point = certified.conditions["exact"].per_seed[0].point
+    point = certified.conditions["exact"].ensemble
     assert point.certified is not None and n.conditions["exact"].miss.value == point.miss.value <= 0.05
-    assert n.conditions["exact"].miss.what == "heavy called light at the certified 1% point, Table 1's, exact, seed 0"
+    assert n.conditions["exact"].miss.what == ("heavy called light at the certified 1% point, Table 1's, exact, "
+                                               "its 2 seeds' ensemble"), "the seeds together, never seed 0 alone"
+    assert "2 seeds as one classifier" in certified.answer
     assert n.clear["exact"].median_s.unit == "s" and 0 < n.clear["exact"].median_s.value <= 1.2
     assert n.certified.points.value == 8 == len(certified.certified_points), "4 classifiers x 2 seeds"
     assert n.clear["observed"].share_by_end.source["stable"] is True

@@ -249,6 +249,9 @@ class Condition:
     """The classifier and its inputs, in words."""
     per_seed: tuple[SeedPoint, ...]
     """Each seed's."""
+    ensemble: operating.OperatingPoint
+    """The seeds as one classifier (the mean of their p(heavy)), its threshold certified once: the number a car
+    would use whatever the seed."""
 
     @property
     def certified(self) -> bool:
@@ -273,14 +276,17 @@ def condition(name: str, models: Sequence[Scorer], x_cert: np.ndarray, y_cert: n
     """Each of ``models`` (one per seed) scored on the certification inputs ``x_cert`` and the test inputs
     ``x_test`` ((n, T, 3) metres): its operating points for ``target``, ROC area, and calibration error before and
     after a temperature fitted on the certification split."""
-    per_seed = []
+    per_seed, certify = [], []
     for m in models:
         pc, pt = m.predict_proba(x_cert)[:, 1], m.predict_proba(x_test)[:, 1]
         temp = operating.fit_temperature(pc, y_cert)
         per_seed.append(SeedPoint(operating.operating_point(pc, y_cert, pt, y_test, target), pt, temp, operating.auc(*operating.roc(pt, y_test)),
                                   operating.expected_calibration_error(pt, y_test),
                                   operating.expected_calibration_error(operating.scaled(pt, temp), y_test)))
-    return Condition(name, tuple(per_seed))
+        certify.append(pc)
+    ensemble = operating.operating_point(np.mean(certify, axis=0), y_cert,
+                                         np.mean([s.p_test for s in per_seed], axis=0), y_test, target)
+    return Condition(name, tuple(per_seed), ensemble)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -394,7 +400,8 @@ class CarDecision:
                     "gives no threshold rather than one it cannot back.")
         text = (f"At the threshold certified for a {self.target} miss rate, Table 1's network on exact positions calls "
                 f"{fmt(exact.miss)} of the heavy test throws light and {fmt(exact.false_alarm)} of the "
-                "light ones heavy (seed 0)")
+                f"light ones heavy (its {len(self.seeds)} seeds as one classifier: the mean of their probabilities, "
+                "certified once)")
         clear = self.numbers.clear["observed"]
         if clear.headline is not None:
             whose = "its seeds as one classifier" if clear.ensemble is not None else "pooled over its seeds"
@@ -487,16 +494,17 @@ def _clear_numbers(fc: FrameClearing, seeds: tuple[int, ...], seconds: float, fp
 
 
 def _condition_numbers(c: Condition, target: float) -> ConditionNumbers:
-    s0 = c.per_seed[0].point
+    e, n = c.ensemble, len(c.per_seed)
     return ConditionNumbers(
         number(c.auc, f"area under the ROC curve, {c.name}, mean over seeds"),
         number(c.ece, f"expected calibration error, {c.name}, mean over seeds"),
         number(c.ece_scaled, f"the same after temperature scaling on the calibration split, {c.name}"),
-        None if s0.miss is None else
-        number(s0.miss, f"heavy called light at the certified {target:.0%} point, {c.name}, seed 0"),
-        None if s0.false_alarm is None else number(s0.false_alarm, f"light called heavy there, {c.name}, seed 0"),
-        number(s0.miss_empirical, f"heavy called light at the calibration split's empirical {target:.0%} quantile, "
-               f"{c.name}, seed 0"))
+        None if e.miss is None else
+        number(e.miss, f"heavy called light at the certified {target:.0%} point, {c.name}, its {n} seeds' ensemble"),
+        None if e.false_alarm is None else
+        number(e.false_alarm, f"light called heavy there, {c.name}, its {n} seeds' ensemble"),
+        number(e.miss_empirical, f"heavy called light at the calibration split's empirical {target:.0%} quantile, "
+               f"{c.name}, its {n} seeds' ensemble"))
 
 
 def _clear_table(networks: dict[NetworkKey, FrameClearing], seconds: float, target: float) -> Table:
@@ -528,10 +536,14 @@ def _decision_table(conditions: dict[ConditionKey, Condition], target: float) ->
             "miss": "; ".join(pct_ci(p.miss) for p in points) if c.certified else "not certifiable",
             "alarm": "; ".join(pct_ci(p.false_alarm) for p in points) if c.certified else "—",
             "quantile": "; ".join(pct_ci(p.miss_empirical) for p in points),
+            "ens_miss": pct_ci(c.ensemble.miss) if c.ensemble.miss is not None else "not certifiable",
+            "ens_alarm": pct_ci(c.ensemble.false_alarm) if c.ensemble.false_alarm is not None else "—",
             "ece": f"{c.ece:.3f} → {c.ece_scaled:.3f}"})
     return Table(rows, {
         "condition": "Z classifier", "auc": "ROC AUC (mean)", "thr": "certified threshold on p(heavy), per seed",
         "miss": f"heavy called light there, test split, per seed [95 % Wilson] (target {target:.0%})",
         "alarm": "light called heavy there (the cost)",
         "quantile": "heavy called light at the empirical quantile instead",
+        "ens_miss": "the seeds' ensemble (mean probability, certified once): heavy called light",
+        "ens_alarm": "the ensemble: light called heavy",
         "ece": "calibration error before → after scaling"})

@@ -39,8 +39,13 @@ OBSERVED_SEEDS: dict[str, int] = {"test": 3, "train": 4}
 def rendered(runner: Runner) -> tuple[list[videos.Video], Any]:
     """The real-world chapter's rendered throws at the data's frame rate, as long as Table 1's input (the
     videos the tracker is calibrated on), rendered once."""
+    return _book_set(runner, runner.render_seed)
+
+
+def _book_set(runner: Runner, seed: int) -> tuple[list[videos.Video], Any]:
+    """The book's renders (``study.methods.videos.book_set``) at the runner's preset and frame rate, from ``seed``."""
     p = runner.preset
-    return videos.book_set(p.name, p.videos_per_class, p.render_shadows, runner.fps, p.length, runner.render_seed, runner.data_dir)
+    return videos.book_set(p.name, p.videos_per_class, p.render_shadows, runner.fps, p.length, seed, runner.data_dir)
 
 
 def tracker_error(runner: Runner) -> TrackerError:
@@ -74,8 +79,7 @@ def decomposition(runner: Runner) -> dict[str, tracker.Decomposition]:
 def development_rendered(runner: Runner) -> list[videos.Video]:
     """Throws rendered as the book's are (:func:`rendered`), from :data:`DEVELOPMENT_RENDER_SEED`: what the
     tracker's settings and its error model are chosen on, never the book's."""
-    p = runner.preset
-    shown, _ = videos.book_set(p.name, p.videos_per_class, p.render_shadows, runner.fps, p.length, DEVELOPMENT_RENDER_SEED, runner.data_dir)
+    shown, _ = _book_set(runner, DEVELOPMENT_RENDER_SEED)
     return shown
 
 
