@@ -120,6 +120,12 @@ def test_help_does_not_import_torch():
     assert out.strip() == "False"
 
 
+def test_the_scale_readings_offered_are_the_package_s():
+    from study.see import scale
+
+    assert cli.SCALE_FROM == scale.SCALE_FROM and cli.SCALE_FROM_DEFAULT in scale.SCALE_FROM
+
+
 @pytest.mark.slow  # trains a tiny model and tracks a rendered video
 def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, small_video, capsys, monkeypatch):
     out = tmp_path / "v"

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from study.core.errors import ConfigError, TrackingError
+from study.see.geometry import GeometryError
 from study.see.scale import ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 
@@ -50,3 +51,37 @@ def test_no_blob_size_and_an_unknown_reading_are_clear_errors():
         read_scale(_traj(np.full(10, np.nan)), ObjectShape("sphere", (0.067,)))
     with pytest.raises(ConfigError, match="rest, mean"):
         read_scale(_traj(np.full(10, 5.0)), ObjectShape("sphere", (0.067,)), "median")
+
+
+def _bounces(mpp: float, diam_px: float, fps: float = 60.0) -> Trajectory:
+    """A ball dropped from 1 m bouncing twice (restitution 0.6) then resting, filmed square-on at ``mpp`` metres per
+    pixel, its blob ``diam_px`` wide: image rows from the true heights."""
+    t = np.arange(int(3 * fps)) / fps
+    z, h, t0, vz = np.zeros_like(t), 1.0, 0.0, 0.0
+    for i, ti in enumerate(t):  # piecewise parabolas from each bounce
+        s = ti - t0
+        z[i] = h + vz * s - 9.81 * s**2 / 2
+        if z[i] < 0:
+            vz = 0.6 * math.sqrt(2 * 9.81 * h) if vz == 0 else 0.6 * vz
+            h, t0, z[i] = 0.0, ti, 0.0
+            if vz < 0.3:
+                vz = 0.0
+    n = len(t)
+    return Trajectory(t=t, u=np.full(n, 50.0), v=400 - np.maximum(z, 0) / mpp, status=np.ones(n, np.int8),
+                      segment=np.zeros(n, np.int32), confidence=np.ones(n), diameter=np.full(n, diam_px))
+
+
+def test_gravity_reads_the_scale_from_the_fall_whatever_the_blob_says():
+    ball = ObjectShape("sphere", (0.067,))
+    true = 0.004  # m/px
+    for blob in (0.067 / true, 0.5 * 0.067 / true):  # the blob read right, and read half its size
+        s = read_scale(_bounces(true, blob), ball, "gravity")
+        assert s.metres_per_pixel == pytest.approx(true, rel=0.02), blob
+        assert s.how == "gravity" and s.flights >= 2 and "gravity" in s.note()
+    assert read_scale(_bounces(true, 0.5 * 0.067 / true), ball, "rest").metres_per_pixel == pytest.approx(2 * true)  # the size path is misled
+
+
+def test_gravity_without_a_free_flight_is_a_clear_error():
+    still = _traj(np.full(60, 20.0), np.full(60, 300.0))
+    with pytest.raises(GeometryError, match="no free flight.*--scale-from rest"):
+        read_scale(still, ObjectShape("sphere", (0.067,)), "gravity")

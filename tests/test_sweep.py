@@ -85,3 +85,22 @@ def test_the_camera_cost_scores_every_path_on_the_same_clips(smoke):
     print({k: (r.rms_mm, r.rms_centred_mm, r.no_heights) for k, r in res["all"].items()})
     assert res["all"]["rest size"].no_heights == 0, "every smoke clip is tracked"
     assert res["all"]["mean silhouette"].rms_centred_mm < 100, "the heights follow the throw"
+
+
+def _truth_clip(tmp_path, z, v):
+    from types import SimpleNamespace
+
+    n = len(z)
+    path = tmp_path / f"truth{len(list(tmp_path.iterdir()))}.csv"
+    np.savetxt(path, np.column_stack([np.arange(n) / 30, np.zeros(n), np.zeros(n), z, np.zeros(n), v]),
+               delimiter=",", header="t,x,y,z,u,v", comments="")
+    return SimpleNamespace(video=SimpleNamespace(truth=path, rest_height=0.1))
+
+
+def test_one_scale_reaches_a_camera_that_sees_height_alone_and_not_one_that_sees_distance(tmp_path):
+    z = 0.1 + np.abs(np.sin(np.linspace(0, 6, 90)))  # centre heights, metres; at rest 0.1
+    square_on = _truth_clip(tmp_path, z, 400 - (z - 0.1) / 0.004)
+    assert camera_cost.one_scale_floor(square_on) == pytest.approx(0.0, abs=1e-9)
+    towards = np.linspace(0, 80, 90)  # the object comes closer: it moves down the picture as it does
+    from_above = _truth_clip(tmp_path, z, 400 - (z - 0.1) / 0.004 + towards)
+    assert camera_cost.one_scale_floor(from_above) > 0.05

@@ -7,6 +7,8 @@ A path reads only the video and what a user knows (the object's colour, shape an
   today's ``study classify VIDEO --object-size``), the ground at the lowest centre position;
 - ``mean silhouette``: one scale, the object's mean-silhouette size (``study.see.size.apparent_size``) over the
   blob's root-mean-square diameter over every measured frame (a tumbling box shows every side on average);
+- ``gravity``: one scale, g over the free flights' image curvature (``study.see.scale.gravity_scale``), the ground
+  at the lowest centre position;
 - ``geometry``: the camera's tilt, height and focal length fitted with gravity as the ruler
   (``study.see.geometry.recover``).
 
@@ -31,7 +33,7 @@ from study.see.gaps import set_scale
 from study.see.scale import ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 
-PATHS = ("rest size", "mean silhouette", "geometry")
+PATHS = ("rest size", "mean silhouette", "gravity", "geometry")
 """The user's paths from pixels to metres, in the order the tables show them."""
 
 
@@ -57,7 +59,8 @@ def _geometry(traj: Trajectory, shape: ObjectShape) -> Trajectory:
 
 
 SCALE: dict[str, Callable[[Trajectory, ObjectShape], Trajectory]] = {
-    "rest size": _one_scale("rest"), "mean silhouette": _one_scale("mean"), "geometry": _geometry}
+    "rest size": _one_scale("rest"), "mean silhouette": _one_scale("mean"), "gravity": _one_scale("gravity"),
+    "geometry": _geometry}
 """Each path: a pixel trajectory and the object's shape -> the trajectory with heights in metres."""
 
 
@@ -108,6 +111,18 @@ def exact_input(clip: Clip, fps: float, n_frames: int) -> np.ndarray:
                       segment=np.zeros(n, np.int32), confidence=np.ones(n), diameter=np.full(n, np.nan),
                       fps=clip.shot.fps, units="m", z=truth["z"], ground_z=clip.video.rest_height)
     return track.to_model_input(traj, fps, n_frames, rest_height=clip.video.rest_height)
+
+
+def one_scale_floor(clip: Clip) -> float:
+    """The least height error, metres RMS, any one-scale path can reach on ``clip``: its true heights against the
+    best line through its true image rows (one scale and one ground row, fitted with hindsight). What is left is the
+    camera's mixing of height with distance: an object that slides or bounces towards a camera above the floor
+    moves down the picture as if it fell, and one scale cannot undo that."""
+    truth = render.read_truth(clip.video.truth)
+    z, v = truth["z"] - clip.video.rest_height, truth["v"]
+    line = np.stack([v, np.ones_like(v)], axis=1)
+    fit = np.linalg.lstsq(line, z, rcond=None)[0]
+    return float(np.sqrt(np.mean((line @ fit - z) ** 2)))
 
 
 @dataclass(frozen=True)

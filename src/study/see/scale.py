@@ -10,8 +10,14 @@ equivalent-disc diameter in pixels, frame by frame; the scale is a real size ove
   silhouette (:meth:`ObjectShape.mean_size`, ``study.see.size.apparent_size``): a tumbling object shows every side,
   and a box resting turned to the camera shows more than one face.
 
-Either way it is one scale for the whole video: the camera's tilt and the object's changes of distance are
-ignored, and the note (:class:`Scale`) says so.
+- ``gravity``: no size at all. Between bounces the object falls at 9.81 m/s^2; the image rows of each free flight
+  (``study.see.geometry.phases``) are fitted with a parabola, and metres per pixel is g over twice its curvature
+  (the median over the flights, each weighted by its frames). A camera tilted down foreshortens the fall and the
+  heights alike, so the ruler carries the tilt; a blob whose size is misread (blur, a tumbling box, a few pixels
+  across) does not move it. The size only helps find the flights.
+
+Each is one scale for the whole video: the object's changes of distance are ignored, and the note (:class:`Scale`)
+says so.
 """
 
 from __future__ import annotations
@@ -23,12 +29,15 @@ import numpy as np
 
 from study.core.errors import ConfigError, TrackingError, check_range
 from study.see.gaps import rest_diameter
+from study.see.geometry import G, GeometryError, phases
 from study.see.size import apparent_size
 from study.see.trajectory import Trajectory
 
 KINDS = ("sphere", "box", "cylinder")
 """Object shapes a scale can be read from."""
-SCALE_FROM = ("rest", "mean")
+SCALE_FROM = ("rest", "mean", "gravity")
+GUESS_FACTORS = (1.0, 0.5, 2.0, 1 / 3, 3.0)
+"""Multiples of the blob's scale ``gravity`` tries when finding the flights."""
 """Which blob size the scale reads (see the module's text)."""
 
 
@@ -83,12 +92,17 @@ class Scale:
     size_m: float
     """The real size it read it against, metres."""
     how: str
-    """'rest' or 'mean' (:data:`SCALE_FROM`)."""
+    """'rest', 'mean' or 'gravity' (:data:`SCALE_FROM`)."""
     frames: int | None
-    """Frames whose blob it read (None for the frames at rest: ``study.see.gaps.rest_diameter`` chooses them)."""
+    """Frames it read (None for the frames at rest: ``study.see.gaps.rest_diameter`` chooses them)."""
+    flights: int = 0
+    """Free flights it fitted ('gravity' only)."""
 
     def note(self) -> str:
         """One line: the scale and what it read."""
+        if self.how == "gravity":
+            return (f"scale {1000 * self.metres_per_pixel:.2f} mm/px (gravity: {self.flights} free flight(s), "
+                    f"{self.frames} frames, fitted as parabolas)")
         what = "at rest" if self.how == "rest" else f"its RMS over {self.frames} frames"
         return f"scale {1000 * self.metres_per_pixel:.2f} mm/px ({self.size_m:.3f} m over a {self.blob_px:.1f}-px blob, {what})"
 
@@ -106,4 +120,35 @@ def read_scale(traj: Trajectory, shape: ObjectShape, how: str = "mean") -> Scale
         blob, size, n = rest_diameter(traj), shape.rest_size(), None
     else:
         blob, size, n = float(np.sqrt(np.mean(d**2))), shape.mean_size(), len(d)
+    if how == "gravity":
+        return gravity_scale(traj, size / blob, blob, size)
     return Scale(size / blob, blob, size, how, n)
+
+
+def gravity_scale(traj: Trajectory, guess: float, blob_px: float = math.nan, size_m: float = math.nan) -> Scale:
+    """Metres per pixel with gravity as the ruler: g over twice the image curvature (rows/s^2) of the free flights,
+    the median over the flights weighted by their frames. ``guess`` (metres per pixel, e.g. from the blob's size)
+    only finds the flights (``study.see.geometry.phases``). Raise :class:`~study.see.geometry.GeometryError` when no
+    free flight is found."""
+    v = np.where(traj.measured, traj.v, np.nan)
+    # A blob misread by 2x would hide every flight from phases' 0.35-1.8 g window: try the guess and its multiples,
+    # keep the reading that finds the most flight frames.
+    arcs = max((phases(traj.t, v, np.full(len(v), guess * f))[0] for f in GUESS_FACTORS),
+               key=lambda found: sum(len(a) for a in found))
+    curv, weight = [], []
+    for a in arcs:
+        a = a[1:-1] if len(a) >= 7 else a  # the widened ends may hold the bounce
+        a = a[np.isfinite(v[a])]
+        if len(a) >= 5:
+            curv.append(2 * np.polyfit(traj.t[a] - traj.t[a].mean(), v[a], 2)[0])  # rows grow downwards
+            weight.append(len(a))
+    if not curv:
+        raise GeometryError(f"{traj.source}: no free flight found to measure gravity by (the object must be seen in "
+                            "the air for at least 5 frames between bounces); read the scale from its size instead "
+                            "(--scale-from rest)")
+    order = np.argsort(curv)
+    cum = np.cumsum(np.asarray(weight)[order])
+    c = float(np.asarray(curv)[order][np.searchsorted(cum, cum[-1] / 2)])
+    if c <= 0:
+        raise GeometryError(f"{traj.source}: its flights curve upwards in the image; is the video upside down?")
+    return Scale(G / c, blob_px, size_m, "gravity", int(sum(weight)), len(curv))
