@@ -85,6 +85,13 @@ def test_the_camera_cost_scores_every_path_on_the_same_clips(smoke):
     print({k: (r.rms_mm, r.rms_centred_mm, r.no_heights) for k, r in res["all"].items()})
     assert res["all"]["rest size"].no_heights == 0, "every smoke clip is tracked"
     assert res["all"]["mean silhouette"].rms_centred_mm < 100, "the heights follow the throw"
+    fl = camera_cost.floors(clips, camera_cost.shape_of(cfg))
+    assert fl["all"].clips == len(clips) and 0 <= fl["all"].true_rows < fl["all"].tracked_rows + 0.05
+    h = camera_cost.heights(clips[0], camera_cost.shape_of(cfg))  # on one clip's frames, the best line beats any path
+    t, path = h.tracks["rest size"], h.paths["rest size"]
+    m = np.isfinite(path)
+    best = camera_cost.line_rms(np.where(m, t.v[: len(path)], np.nan), h.exact)
+    assert best <= float(np.sqrt(np.mean((path[m] - h.exact[m]) ** 2))) + 1e-9
 
 
 def _truth_clip(tmp_path, z, v):

@@ -113,16 +113,50 @@ def exact_input(clip: Clip, fps: float, n_frames: int) -> np.ndarray:
     return track.to_model_input(traj, fps, n_frames, rest_height=clip.video.rest_height)
 
 
+def line_rms(v: np.ndarray, z: np.ndarray) -> float:
+    """Root-mean-square error, in ``z``'s units, of the best line ``z ~ a v + b`` (least squares over the frames where
+    both are finite): the least error of one scale ``a`` and one ground row."""
+    m = np.isfinite(v) & np.isfinite(z)
+    line = np.stack([v[m], np.ones(int(m.sum()))], axis=1)
+    fit = np.linalg.lstsq(line, z[m], rcond=None)[0]
+    return float(np.sqrt(np.mean((line @ fit - z[m]) ** 2)))
+
+
 def one_scale_floor(clip: Clip) -> float:
     """The least height error, metres RMS, any one-scale path can reach on ``clip``: its true heights against the
     best line through its true image rows (one scale and one ground row, fitted with hindsight). What is left is the
     camera's mixing of height with distance: an object that slides or bounces towards a camera above the floor
     moves down the picture as if it fell, and one scale cannot undo that."""
     truth = render.read_truth(clip.video.truth)
-    z, v = truth["z"] - clip.video.rest_height, truth["v"]
-    line = np.stack([v, np.ones_like(v)], axis=1)
-    fit = np.linalg.lstsq(line, z, rcond=None)[0]
-    return float(np.sqrt(np.mean((line @ fit - z) ** 2)))
+    return line_rms(truth["v"], truth["z"] - clip.video.rest_height)
+
+
+@dataclass(frozen=True)
+class Floor:
+    """Where a one-scale path's height error comes from, on a group of clips (metres RMS, pooled over clips)."""
+
+    true_rows: float
+    """:func:`one_scale_floor`: the camera's own limit, with the true image rows."""
+    tracked_rows: float
+    """The same with the tracker's rows: the limit plus what the tracker adds."""
+    clips: int
+    """Clips tracked."""
+
+
+def floors(clips: Sequence[Clip], shape: ObjectShape) -> dict[str, Floor]:
+    """:class:`Floor` for every clip tracked ('all' and each family, as :func:`measure`): tracks each clip again."""
+    rows: dict[str, list[tuple[float, float]]] = {"all": []}
+    for clip in clips:
+        h = heights(clip, shape)
+        if not h.tracks:
+            continue
+        t = next(iter(h.tracks.values()))
+        n = min(len(t.v), len(h.exact))
+        tracked = line_rms(np.where(t.status[:n] > 0, t.v[:n], np.nan), h.exact[:n])
+        pair = (one_scale_floor(clip), tracked)
+        rows["all"].append(pair)
+        rows.setdefault(clip.shot.family, []).append(pair)
+    return {g: Floor(*np.sqrt(np.mean(np.square(r), axis=0)).tolist(), len(r)) for g, r in rows.items()}
 
 
 @dataclass(frozen=True)
