@@ -235,7 +235,8 @@ def test_cli_classify_video_and_csv(rendered, tmp_path, z_model, capsys):
     assert x[:, 2].max() > 0.6  # metres: the box was thrown from 1 m
     p = tm.predict_proba(x[None])[0]
     k = int(p.argmax())
-    assert rc == 0 and out == [f"{rendered.video}: {('light', 'heavy')[k]} (p = {p[k]:.3f}; model {folder})"]
+    assert rc == 0 and out[0] == f"{rendered.video}: {('light', 'heavy')[k]} (p = {p[k]:.3f}; model {folder})"
+    assert len(out) == 2 and out[1].startswith("  assumed: scale ") and "at rest" in out[1], "what it assumed"
     track.write_csv(track.track_video(rendered.video, FAST), tmp_path / "px.csv")
     rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv")])
     assert rc == 2 and "pixels" in capsys.readouterr().err  # a pixel CSV needs a scale
