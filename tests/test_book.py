@@ -193,6 +193,25 @@ def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.mark.slow
+def test_chapters_run_in_the_root_and_the_build_never_moves_the_process(tmp_path: Path,
+                                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """Chapters execute two at a time in threads: a chdir around one would move every thread's working folder."""
+    root = write_book(tmp_path / "b", {"alpha": ALPHA, "beta": BETA, "notes": NOTES}, TOC)
+    (root / "inputs.txt").write_text("first\n")
+
+    here, chdir = os.getcwd(), os.chdir
+
+    def stay(path: str) -> None:  # papermill's file reads "chdir" to the folder they are in: allowed
+        if os.path.realpath(path) != os.path.realpath(here):
+            raise AssertionError(f"the build moved the process to {path}")
+        chdir(path)
+
+    monkeypatch.setattr(os, "chdir", stay)
+    book.build(root, "smoke", force=False, only=None, html=False)
+    assert glued(root, "alpha", "content") == "'first'", "alpha read inputs.txt from the root: its kernel ran there"
+
+
+@pytest.mark.slow
 def test_build_executes_injects_and_renders(tiny: Path) -> None:
     book.render_html(tiny)
     nb = nbformat.read(executed(tiny, "alpha"), as_version=4)

@@ -325,7 +325,10 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
                 str(running),
                 parameters=parameters,
                 kernel_name=KERNEL,
-                cwd=str(root),
+                # The kernel starts in the root (nbclient's resources path), and the process stays where it is:
+                # papermill's cwd= would chdir the whole process around each chapter, and chapters run two at a
+                # time in threads, so two of them restoring out of order left the caller in the book's root.
+                resources={"metadata": {"path": str(root)}},
                 progress_bar=False,  # the Follower shows what the chapter is doing instead
                 log_output=False,
                 # The kernel's own log (not the cells' output) only warns that its local TCP link is
