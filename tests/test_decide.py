@@ -252,7 +252,7 @@ def test_a_condition_certifies_its_seeds_as_one_classifier_on_their_mean_probabi
     c = decision.condition("two seeds", models, x_cert, y_cert, x_test, y_test, 0.01)
     mean = [np.mean([m.predict_proba(x)[:, 1] for m in models], axis=0) for x in (x_cert, x_test)]
     want = operating.operating_point(mean[0], y_cert, mean[1], y_test, 0.01)
-    assert c.ensemble == want and want.certified is not None
+    assert c.ensemble == want and want.certified is not None and np.array_equal(c.p_test, mean[1])
     assert c.ensemble.certified not in {s.point.certified for s in c.per_seed}, "neither seed's own threshold"
 
 

@@ -564,8 +564,9 @@ class Summary:
         exact, observed = dc.conditions["exact"], dc.clear["observed"]  # type: ignore[index]
         if exact.miss is not None and exact.false_alarm is not None and observed.headline is not None:
             items.append(f"A car's decision at a certified {fmt(exact.miss)} test miss rate (target 1 %; Table 1's Z "
-                         f"network, its seeds as one classifier): light objects called heavy {fmt(exact.false_alarm)}; cleared within the input by the camera's network, "
-                         f"{fmt(observed.headline)} (*From accuracy to a car's decision*).")
+                         f"network, its seeds as one classifier): light objects called heavy {fmt(exact.false_alarm)}; "
+                         f"cleared within the input by the camera's network, {fmt(observed.headline)} (*From accuracy "
+                         "to a car's decision*).")
         items.append(f"A practitioner's baseline: MiniRocket {fmt(c.baselines.accuracy['minirocket']['z']['exact'])} "
                      "on Z, exact positions.")
         items.append(f"Every accuracy with a 95 % interval: {self.n_with_ci} of the {self.n_numbers} numbers in this "

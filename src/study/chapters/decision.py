@@ -254,6 +254,11 @@ class Condition:
     would use whatever the seed."""
 
     @property
+    def p_test(self) -> np.ndarray:
+        """(n,) the seeds' mean p(heavy) on the test split: what :attr:`ensemble` thresholds."""
+        return np.mean([s.p_test for s in self.per_seed], axis=0)
+
+    @property
     def certified(self) -> bool:
         """Whether a threshold could be certified (on seed 0; every seed shares the certification split)."""
         return self.per_seed[0].point.certified is not None
@@ -284,9 +289,9 @@ def condition(name: str, models: Sequence[Scorer], x_cert: np.ndarray, y_cert: n
                                   operating.expected_calibration_error(pt, y_test),
                                   operating.expected_calibration_error(operating.scaled(pt, temp), y_test)))
         certify.append(pc)
-    ensemble = operating.operating_point(np.mean(certify, axis=0), y_cert,
-                                         np.mean([s.p_test for s in per_seed], axis=0), y_test, target)
-    return Condition(name, tuple(per_seed), ensemble)
+    p_test = np.mean([s.p_test for s in per_seed], axis=0)
+    return Condition(name, tuple(per_seed), operating.operating_point(np.mean(certify, axis=0), y_cert, p_test, y_test,
+                                                                      target))
 
 
 # ---------------------------------------------------------------------------------------------
