@@ -73,7 +73,9 @@ class _Says:
 @pytest.mark.slow
 def test_the_camera_cost_scores_every_path_on_the_same_clips(smoke):
     cfg, clips, _ = smoke
-    res = camera_cost.measure([_Says(False), _Says(True)], clips, camera_cost.shape_of(cfg), progress=False)
+    tracked: list = []
+    res = camera_cost.measure([_Says(False), _Says(True)], clips, camera_cost.shape_of(cfg), progress=False,
+                              tracked=tracked)
     assert list(res) == ["all", *sweep.FAMILIES]
     exact = res["all"]["exact"]
     assert exact.accuracy.value == 0.5 and exact.cost is None and exact.rms_mm == 0  # one seed right on each clip
@@ -85,7 +87,7 @@ def test_the_camera_cost_scores_every_path_on_the_same_clips(smoke):
     print({k: (r.rms_mm, r.rms_centred_mm, r.no_heights) for k, r in res["all"].items()})
     assert res["all"]["rest size"].no_heights == 0, "every smoke clip is tracked"
     assert res["all"]["mean silhouette"].rms_centred_mm < 100, "the heights follow the throw"
-    fl = camera_cost.floors(clips, camera_cost.shape_of(cfg))
+    fl = camera_cost.floors(clips, tracked)
     assert fl["all"].clips == len(clips) and 0 <= fl["all"].true_rows < fl["all"].tracked_rows + 0.05
     h = camera_cost.heights(clips[0], camera_cost.shape_of(cfg))  # on one clip's frames, the best line beats any path
     t, path = h.tracks["rest size"], h.paths["rest size"]

@@ -143,17 +143,16 @@ class Floor:
     """Clips tracked."""
 
 
-def floors(clips: Sequence[Clip], shape: ObjectShape) -> dict[str, Floor]:
-    """:class:`Floor` for every clip tracked ('all' and each family, as :func:`measure`): tracks each clip again."""
+def floors(clips: Sequence[Clip], tracked: Sequence[Heights]) -> dict[str, Floor]:
+    """:class:`Floor` for every clip tracked ('all' and each family, as :func:`measure`), from each clip's
+    :func:`heights` (``tracked``, in the order of ``clips``: the tracking :func:`measure` already did)."""
     rows: dict[str, list[tuple[float, float]]] = {"all": []}
-    for clip in clips:
-        h = heights(clip, shape)
+    for clip, h in zip(clips, tracked, strict=True):
         if not h.tracks:
             continue
         t = next(iter(h.tracks.values()))
         n = min(len(t.v), len(h.exact))
-        tracked = line_rms(np.where(t.status[:n] > 0, t.v[:n], np.nan), h.exact[:n])
-        pair = (one_scale_floor(clip), tracked)
+        pair = (one_scale_floor(clip), line_rms(np.where(t.status[:n] > 0, t.v[:n], np.nan), h.exact[:n]))
         rows["all"].append(pair)
         rows.setdefault(clip.shot.family, []).append(pair)
     return {g: Floor(*np.sqrt(np.mean(np.square(r), axis=0)).tolist(), len(r)) for g, r in rows.items()}
@@ -175,11 +174,12 @@ class PathResult:
     """Clips the path could not turn into heights."""
 
 
-def measure(members: Sequence, clips: Sequence[Clip], shape: ObjectShape, progress: bool = True
-            ) -> dict[str, dict[str, PathResult]]:
+def measure(members: Sequence, clips: Sequence[Clip], shape: ObjectShape, progress: bool = True,
+            tracked: list[Heights] | None = None) -> dict[str, dict[str, PathResult]]:
     """Every path on ``clips`` (of an object of ``shape``) classified by each of ``members`` (trained 'z' models: the seeds of one
     configuration, each with ``predict_proba``, ``fps`` and ``n_frames``): group ('all' and each family) ->
-    path ('exact' and :data:`PATHS`) -> :class:`PathResult`."""
+    path ('exact' and :data:`PATHS`) -> :class:`PathResult`. Each clip's :func:`heights` is appended to
+    ``tracked`` if given (for :func:`floors`)."""
     first = members[0]
     fps, n_frames = first.fps, first.n_frames
     names = ("exact", *PATHS)
@@ -190,6 +190,8 @@ def measure(members: Sequence, clips: Sequence[Clip], shape: ObjectShape, progre
     with Progress("camera cost", total=len(clips), show=progress, unit="clip") as bar:
         for i, clip in enumerate(clips):
             h = heights(clip, shape)
+            if tracked is not None:
+                tracked.append(h)
             x = {"exact": exact_input(clip, fps, n_frames)}
             errors["exact"][i] = np.zeros(1)
             for k in PATHS:
