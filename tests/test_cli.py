@@ -123,7 +123,7 @@ def test_help_does_not_import_torch():
 def test_the_scale_readings_offered_are_the_package_s():
     from study.see import scale
 
-    assert cli.SCALE_FROM == scale.SCALE_FROM and cli.SCALE_FROM_DEFAULT in scale.SCALE_FROM
+    assert cli.SCALE_FROM == scale.SCALE_FROM and cli.SCALE_FROM_DEFAULT == scale.DEFAULT in scale.SCALE_FROM
 
 
 @pytest.mark.slow  # trains a tiny model and tracks a rendered video

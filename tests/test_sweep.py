@@ -6,6 +6,7 @@ import pytest
 
 from study.methods import camera_cost, sweep, videos
 from study.see import render
+from study.simulate import measure as motion
 from study.simulate import synth
 
 
@@ -73,9 +74,10 @@ class _Says:
 @pytest.mark.slow
 def test_the_camera_cost_scores_every_path_on_the_same_clips(smoke):
     cfg, clips, _ = smoke
-    tracked: list = []
-    res = camera_cost.measure([_Says(False), _Says(True)], clips, camera_cost.shape_of(cfg), progress=False,
-                              tracked=tracked)
+    shape = camera_cost.shape_of(cfg)
+    tracked = camera_cost.track_clips(clips, shape, progress=False)
+    got = camera_cost.measure([_Says(False), _Says(True)], clips, tracked)
+    res = got.results
     assert list(res) == ["all", *sweep.FAMILIES]
     exact = res["all"]["exact"]
     assert exact.accuracy.value == 0.5 and exact.cost is None and exact.rms_mm == 0  # one seed right on each clip
@@ -84,16 +86,41 @@ def test_the_camera_cost_scores_every_path_on_the_same_clips(smoke):
         answered = 1 - r.no_heights / len(clips)
         assert r.accuracy.value == pytest.approx(0.5 * answered)
         assert r.cost.value == pytest.approx(exact.accuracy.value - r.accuracy.value)
+        assert got.difference("exact", name).value == pytest.approx(r.cost.value)
     print({k: (r.rms_mm, r.rms_centred_mm, r.no_heights) for k, r in res["all"].items()})
     assert res["all"]["rest size"].no_heights == 0, "every smoke clip is tracked"
     assert res["all"]["mean silhouette"].rms_centred_mm < 100, "the heights follow the throw"
     fl = camera_cost.floors(clips, tracked)
     assert fl["all"].clips == len(clips) and 0 <= fl["all"].true_rows < fl["all"].tracked_rows + 0.05
-    h = camera_cost.heights(clips[0], camera_cost.shape_of(cfg))  # on one clip's frames, the best line beats any path
+    h = tracked[0]  # on one clip's frames, the best line beats any path
     t, path = h.tracks["rest size"], h.paths["rest size"]
     m = np.isfinite(path)
     best = camera_cost.line_rms(np.where(m, t.v[: len(path)], np.nan), h.exact)
     assert best <= float(np.sqrt(np.mean((path[m] - h.exact[m]) ** 2))) + 1e-9
+    assert 0 < camera_cost.size_error(clips, tracked, shape) < 0.5, "the blob is about the object's size"
+
+
+@pytest.mark.slow
+def test_the_drag_rule_on_the_sweep_reads_each_paths_first_fall(smoke):
+    cfg, clips, _ = smoke
+    tracked = camera_cost.track_clips(clips, camera_cost.shape_of(cfg), progress=False)
+    fps, n = 30.0, 30
+    x, _ = camera_cost.inputs(clips, tracked, fps, n)
+    contact = cfg.shape.bounding_radius
+    f_exact = motion.fall_acceleration(x["exact"][..., 2], fps, contact)
+    assert np.isfinite(f_exact).all() and (np.abs(f_exact + 9.81) < 2).all(), "the exact first falls are near -g"
+    y = np.array([c.video.label == "heavy" for c in clips], int)
+    # trained on the exact falls themselves, with the labels flipped on one side of the median: the rule learns
+    # that split, and the exact path scores it perfectly against labels that follow it
+    split = f_exact > np.median(f_exact)
+    for c, heavy in zip(clips, split):
+        c.video.label = "heavy" if heavy else "light"
+    try:
+        acc = camera_cost.drag_rule(f_exact, split.astype(int), clips, tracked, fps, n, contact)
+    finally:
+        for c, lab in zip(clips, y):
+            c.video.label = "heavy" if lab else "light"
+    assert acc["exact"].value == 1.0 and set(acc) == {"exact", *camera_cost.PATHS}
 
 
 def _truth_clip(tmp_path, z, v):

@@ -19,6 +19,7 @@ lost, no free flight) gets no answer and counts as a miss; :class:`PathResult` s
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -27,11 +28,13 @@ import numpy as np
 from study.core.errors import StudyError
 from study.core.progress import Progress
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
+from study.methods import sweep
 from study.methods.sweep import Clip
 from study.see import geometry, render, track
 from study.see.gaps import set_scale
 from study.see.scale import ObjectShape, read_scale
 from study.see.trajectory import Trajectory
+from study.simulate import measure as motion
 
 PATHS = ("rest size", "mean silhouette", "gravity", "geometry")
 """The user's paths from pixels to metres, in the order the tables show them."""
@@ -174,53 +177,112 @@ class PathResult:
     """Clips the path could not turn into heights."""
 
 
-def measure(members: Sequence, clips: Sequence[Clip], shape: ObjectShape, progress: bool = True,
-            tracked: list[Heights] | None = None) -> dict[str, dict[str, PathResult]]:
-    """Every path on ``clips`` (of an object of ``shape``) classified by each of ``members`` (trained 'z' models: the seeds of one
-    configuration, each with ``predict_proba``, ``fps`` and ``n_frames``): group ('all' and each family) ->
-    path ('exact' and :data:`PATHS`) -> :class:`PathResult`. Each clip's :func:`heights` is appended to
-    ``tracked`` if given (for :func:`floors`)."""
-    first = members[0]
-    fps, n_frames = first.fps, first.n_frames
-    names = ("exact", *PATHS)
-    correct = {k: np.zeros((len(members), len(clips)), bool) for k in names}
-    errors: dict[str, list[np.ndarray]] = {k: [np.array([])] * len(clips) for k in names}
-    missing = {k: np.zeros(len(clips), bool) for k in names}
-    y = np.array([c.video.label == "heavy" for c in clips])
-    with Progress("camera cost", total=len(clips), show=progress, unit="clip") as bar:
-        for i, clip in enumerate(clips):
-            h = heights(clip, shape)
-            if tracked is not None:
-                tracked.append(h)
-            x = {"exact": exact_input(clip, fps, n_frames)}
-            errors["exact"][i] = np.zeros(1)
-            for k in PATHS:
-                got = h.paths[k]
-                if isinstance(got, str):
-                    missing[k][i] = True
-                    continue
-                errors[k][i] = (got - h.exact)[np.isfinite(got)]
-                try:
-                    x[k] = track.to_model_input(h.tracks[k], fps, n_frames, rest_height=clip.video.rest_height)
-                except StudyError:
-                    missing[k][i] = True
-            for s, m in enumerate(members):
-                for k, xi in x.items():
-                    correct[k][s, i] = (float(np.asarray(m.predict_proba(xi[None]))[0, 1]) > 0.5) == y[i]
+def track_clips(clips: Sequence[Clip], shape: ObjectShape, progress: bool = True) -> list[Heights]:
+    """:func:`heights` of every clip, in order: each clip tracked once, for every model and rule to read."""
+    out = []
+    with Progress("track the camera sweep", total=len(clips), show=progress, unit="clip") as bar:
+        for clip in clips:
+            out.append(heights(clip, shape))
             bar.update()
-    groups = {"all": np.ones(len(clips), bool)}
-    for fam in dict.fromkeys(c.shot.family for c in clips):
-        groups[fam] = np.array([c.shot.family == fam for c in clips])
+    return out
+
+
+def inputs(clips: Sequence[Clip], tracked: Sequence[Heights], fps: float, n_frames: int
+           ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """What a model reads of every clip by every path: (path -> (n_clips, n_frames, 3) float32 metres, path ->
+    (n_clips,) bool, the clips the path has no heights for, whose rows are zeros)."""
+    names = ("exact", *PATHS)
+    x = {k: np.zeros((len(clips), n_frames, 3), np.float32) for k in names}
+    missing = {k: np.zeros(len(clips), bool) for k in names}
+    for i, (clip, h) in enumerate(zip(clips, tracked, strict=True)):
+        x["exact"][i] = exact_input(clip, fps, n_frames)
+        for k in PATHS:
+            if isinstance(h.paths[k], str):
+                missing[k][i] = True
+                continue
+            try:
+                x[k][i] = track.to_model_input(h.tracks[k], fps, n_frames, rest_height=clip.video.rest_height)
+            except StudyError:
+                missing[k][i] = True
+    return x, missing
+
+
+@dataclass(frozen=True)
+class Measured:
+    """One model (the seeds of one configuration) on the sweep, by every path."""
+
+    results: dict[str, dict[str, PathResult]]
+    """Group ('all' and each family) -> path ('exact' and :data:`PATHS`) -> :class:`PathResult`."""
+    correct: dict[str, np.ndarray]
+    """Path -> (seeds, clips) bool: which seed labelled which clip right."""
+    families: tuple[str, ...]
+    """Each clip's camera family, in order."""
+
+    def difference(self, a: str, b: str, group: str = "all") -> Interval:
+        """Path ``a``'s accuracy minus path ``b``'s on ``group``'s clips, paired over clips and seeds."""
+        sel = np.array([group in ("all", f) for f in self.families])
+        return bootstrap_difference(self.correct[a][:, sel], self.correct[b][:, sel])
+
+
+def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]) -> Measured:
+    """Every path on ``clips`` (their :func:`track_clips`, ``tracked``) classified by each of ``members`` (trained
+    'z' models: the seeds of one configuration, each with ``predict_proba``, ``fps`` and ``n_frames``)."""
+    first = members[0]
+    x, missing = inputs(clips, tracked, first.fps, first.n_frames)
+    y = np.array([c.video.label == "heavy" for c in clips])
+    correct = {k: np.stack([(np.asarray(m.predict_proba(xk))[:, 1] > 0.5) == y for m in members]) & ~missing[k]
+               for k, xk in x.items()}
+    errors: dict[str, list[np.ndarray]] = {"exact": [np.zeros(1)] * len(clips)}
+    for k in PATHS:
+        errors[k] = [np.array([]) if isinstance(h.paths[k], str) else (h.paths[k] - h.exact)[np.isfinite(h.paths[k])]
+                     for h in tracked]
+    fams = tuple(c.shot.family for c in clips)
     out: dict[str, dict[str, PathResult]] = {}
-    for g, sel in groups.items():
+    for g in ("all", *dict.fromkeys(fams)):
+        sel = np.array([g in ("all", f) for f in fams])
         out[g] = {}
-        for k in names:
+        for k in x:
             e = [errors[k][i] for i in np.flatnonzero(sel) if len(errors[k][i])]
             pooled = np.concatenate(e) if e else np.array([np.nan])
-            centred = np.concatenate([x - np.median(x) for x in e]) if e else np.array([np.nan])
+            centred = np.concatenate([v - np.median(v) for v in e]) if e else np.array([np.nan])
             out[g][k] = PathResult(
                 bootstrap_accuracy(correct[k][:, sel]),
                 None if k == "exact" else bootstrap_difference(correct["exact"][:, sel], correct[k][:, sel]),
                 1000 * float(np.sqrt(np.mean(pooled**2))), 1000 * float(np.sqrt(np.mean(centred**2))),
                 int(missing[k][sel].sum()))
+    return Measured(out, correct, fams)
+
+
+def drag_rule(f_train: np.ndarray, y_train: np.ndarray, clips: Sequence[Clip], tracked: Sequence[Heights],
+              fps: float, n_frames: int, contact_height: float) -> dict[str, Interval]:
+    """The drag rule (one threshold on the first fall's vertical acceleration, ``study.simulate.measure``), its
+    threshold chosen on the training throws' exact accelerations ``f_train`` (n,) m/s^2 with labels ``y_train``
+    (n,), scored on the sweep's clips read by each path (and exactly): path -> accuracy over the clips. A clip
+    without heights gets the training median's label."""
+    x, _ = inputs(clips, tracked, fps, n_frames)
+    y = np.array([c.video.label == "heavy" for c in clips], int)
+    out = {}
+    for k, xk in x.items():
+        f = motion.fall_acceleration(xk[..., 2], fps, contact_height)
+        out[k] = bootstrap_accuracy(motion.best_threshold_rule(f_train, y_train, f, y)["correct"])
     return out
+
+
+def size_error(clips: Sequence[Clip], tracked: Sequence[Heights], shape: ObjectShape) -> float:
+    """Median over the clips of each clip's median relative error of the blob's diameter, frame by frame, against
+    the disc of the object's mean silhouette at its true depth (``study.see.size``): how far one frame's apparent
+    size says where the object is."""
+    errs = []
+    for clip, h in zip(clips, tracked, strict=True):
+        if not h.tracks:
+            continue
+        t = next(iter(h.tracks.values()))
+        truth = render.read_truth(clip.video.truth)
+        points = np.stack([truth["x"], truth["y"], truth["z"]], axis=1)
+        cam = sweep.camera(clip.shot, points)
+        true_px = cam.focal * shape.mean_size() / cam.depth_of(points)
+        n = min(len(true_px), len(t.diameter))
+        rel = np.abs(np.where(t.status[:n] > 0, t.diameter[:n], np.nan) / true_px[:n] - 1)
+        if np.isfinite(rel).any():
+            errs.append(float(np.nanmedian(rel)))
+    return float(np.median(errs)) if errs else math.nan

@@ -15,7 +15,9 @@ beside each video, the renderer's ground truth (``study.see.render``).
 
 from __future__ import annotations
 
+import json
 import math
+import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
@@ -59,6 +61,10 @@ MIN_PIXELS = 8.0
 SWEEP_SEED = 3000
 """Seed of the sweep's throws (their test split): no data set trains on it, and the tracker's development renders
 (``study.methods.calibration.DEVELOPMENT_RENDER_SEED``, 2000) and the book's (1000) are other throws."""
+
+TIMES = "RENDER_SECONDS.json"
+"""Beside the clips: each clip's rendering time as it was made, ``{file: {"cpu_s": ..., "wall_s": ...}}`` (the
+process's CPU seconds and the wall clock's), so a cached sweep still says what it cost."""
 
 DURATION = 3.0
 """Clip length, seconds (the models' input)."""
@@ -193,19 +199,42 @@ def sweep_set(cfg, per_family: int, seed: int, out_dir: str | Path, progress: bo
                          truth=(folder / name).with_suffix(".csv"), info={"family": shot.family, **asdict(shot)})
         clips.append(Clip(v, shot))
     todo = [(c, i, cam) for c, (i, _, cam) in zip(clips, plan) if not (c.video.path.is_file() and c.video.truth.is_file())]
+    times = _read_times(folder)
     with Progress("render the camera sweep", total=len(todo), show=progress, unit="clip") as bar:
         for c, i, cam in todo:
+            cpu, wall = time.process_time(), time.perf_counter()
             model, qpos, qvel = videos.throw(cfg, params, i)
             dress(model, c.shot, cam)
             rcfg = render.RenderConfig(width=c.shot.width, height=c.shot.height_px, fps=c.shot.fps, duration=duration,
                                        blur_subframes=2, noise_std=2.0, jpeg_quality=85, seed=seed + i)
             render.render(model, qpos, qvel, c.video.path, rcfg)
+            times[c.video.path.name] = {"cpu_s": round(time.process_time() - cpu, 2),
+                                        "wall_s": round(time.perf_counter() - wall, 2)}
+            cache.write_text_atomic(folder / TIMES, json.dumps(times, indent=1, sort_keys=True))
             bar.update()
     manifest = "file,label,family,color,object_size\n" + "".join(
         f"{c.video.path.name},{c.video.label},{c.shot.family},{c.shot.colour},{size:.6g}\n" for c in clips)
     if not (folder / "MANIFEST.csv").is_file() or (folder / "MANIFEST.csv").read_text() != manifest:
         cache.write_text_atomic(folder / "MANIFEST.csv", manifest)
     return clips
+
+
+def render_times(clips: list[Clip]) -> dict[str, dict[str, float]]:
+    """Each of ``clips``' rendering time as it was made (:data:`TIMES`): file name -> ``{"cpu_s", "wall_s"}``,
+    seconds; a clip rendered before times were kept is missing."""
+    out: dict[str, dict[str, float]] = {}
+    for folder in dict.fromkeys(c.video.path.parent for c in clips):
+        out.update(_read_times(folder))
+    return {c.video.path.name: out[c.video.path.name] for c in clips if c.video.path.name in out}
+
+
+def _read_times(folder: Path) -> dict[str, dict[str, float]]:
+    """The folder's :data:`TIMES` ({} where none or unreadable: the times are a record, not a cache)."""
+    try:
+        got = json.loads((folder / TIMES).read_text())
+    except (OSError, ValueError):
+        return {}
+    return got if isinstance(got, dict) else {}
 
 
 def _keep(family: str, path: np.ndarray, size: float, rng: np.random.Generator, max_draws: int,

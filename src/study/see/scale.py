@@ -36,9 +36,13 @@ from study.see.trajectory import Trajectory
 KINDS = ("sphere", "box", "cylinder")
 """Object shapes a scale can be read from."""
 SCALE_FROM = ("rest", "mean", "gravity")
+"""How the scale is read (see the module's text)."""
+DEFAULT = "rest"
+"""The way a user's path reads the scale unless told otherwise (``study classify``, the real-world chapter): the
+paths' accuracies on the camera sweep cannot be told apart (the chapter shows it), and the object at rest is what
+a user can check by eye."""
 GUESS_FACTORS = (1.0, 0.5, 2.0, 1 / 3, 3.0)
 """Multiples of the blob's scale ``gravity`` tries when finding the flights."""
-"""Which blob size the scale reads (see the module's text)."""
 
 
 @dataclass(frozen=True)
