@@ -21,7 +21,11 @@ The pipeline, video by video:
 3. Table 1's Z model (and the recommended one, where it differs) on every video, per class with Wilson
    intervals beside the paper's 93 % and 100 % (``study.runs.paper.REAL_WORLD``), every candidate's
    label for every video, and how the labels move with a wrong scale (:data:`FACTORS`);
-4. the data of the paper's Figures 1, 5 and 6 (:class:`Filmstrip`, :class:`HeightSeries`, :class:`TrackView`).
+4. the data of the paper's Figures 1, 5 and 6 (:class:`Filmstrip`, :class:`HeightSeries`, :class:`TrackView`);
+5. a user's camera: the rendered videos again on the path ``study classify VIDEO`` takes with no camera
+   (:func:`user_tracks`), and the camera sweep (:func:`camera_sweep`, :class:`CameraSweep`): throws filmed from
+   cameras the study never saw, their heights had by every path of ``study.methods.camera_cost`` and classified
+   by every candidate, beside the same throws' exact heights.
 
 :class:`Numbers` is what the chapter reports, under the names ``realworld.table1.rendered.light`` and so on.
 """
