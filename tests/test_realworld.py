@@ -255,11 +255,13 @@ def _result(numbers: realworld.Numbers, choice: str, cs: realworld.CameraSweep |
 
 def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_path):
     cs = _sweep()
-    n = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, REAL)}, {"table1": RENDERED}, cs)
+    n = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, REAL)}, {"table1": RENDERED}, cs,
+                           {"table1": RENDERED[:3]})
     names = [name for name, _ in n.entries()]
     assert {"realworld.sweep.all.clips", "realworld.sweep.low.rest.accuracy", "realworld.sweep.high.rest.cost",
             "realworld.sweep.all.exact.heights_mm", "realworld.sweep.all.floor_mm", "realworld.sweep.drag.rest",
-            "realworld.sweep.size_error", "realworld.sweep.render_cpu_s", "realworld.user.table1.light"} <= set(names)
+            "realworld.sweep.size_error", "realworld.sweep.render_cpu_s", "realworld.user.table1.light",
+            "realworld.exact.table1.heavy"} <= set(names)
     assert "realworld.sweep.all.exact.cost" not in names, "the exact path has no cost"
     assert n.sweep.groups["low"].clips.value == 10 and n.sweep.groups["all"].clips.value == 20
     assert n.user["table1"]["light"].verdict == "not comparable"
@@ -267,13 +269,15 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     f.write_text(results.dumps(n.entries()))
     assert realworld.Numbers.read(results.load(f)) == n
     r = _result(n, "velocity, randomised", cs)
-    assert "on 20 clips" in r.sweep_words and "most from the high cameras" in r.sweep_words
+    assert r.sweep_words.startswith("On 20 clips") and "most from the high cameras" in r.sweep_words
     assert "interval that holds 0" in r.default_words and "the default stays" in r.default_words
     assert "does not survive" in r.drag_words and "rest size" in r.drag_words
     assert r.depth_words == "7.5 % of the median camera distance, 4.0 m, is 30 cm of depth"
     assert "the tracker is not what limits" in r.floor_words
     assert r.render_words.startswith("rendering the 20 clips took 10.0 CPU-minutes (5.5 minutes")
     assert r.user_words.startswith("on a user's path, with no camera, it labels 50.0 % [")
+    assert r.user_words.endswith("(by the renderer's camera: 50.0 %, 100.0 %; from the throws' exact heights: "
+                                 "50.0 %, 100.0 %)")
     clear = _result(n, "velocity, randomised", _sweep(best_path_gain=0.5, drag_rest=_iv(0.9)))
     assert "interval clear of 0" in clear.default_words and "should default to it" in clear.default_words
     assert "survives every path" in clear.drag_words

@@ -148,6 +148,13 @@ def user_tracks(videos: Sequence[Video], shape: ObjectShape | None = None,
     return out
 
 
+def truth_tracks(videos: Sequence[Video]) -> dict[str, Tracked]:
+    """Every rendered video's true centre (:func:`study.methods.camera_cost.truth_trajectory`): what the model
+    answers from the throw's exact heights, with no tracker and no camera in the way."""
+    return {v.path.name: Tracked(camera_cost.truth_trajectory(v)) if v.truth is not None else
+            Tracked(None, "no ground truth") for v in videos}
+
+
 @dataclass(frozen=True)
 class Label:
     """What a model says about one video (:func:`classify`): its label and what the tracker saw, or why the video
@@ -693,12 +700,19 @@ class RealWorld:
 
     @property
     def user_words(self) -> str:
-        """What Table 1's model does on the rendered videos with no camera, beside the known camera."""
+        """What Table 1's model does on the rendered videos with no camera, beside the known camera and the
+        throws' exact heights."""
         user, known = self.numbers.user.get("table1", {}), self.numbers.models["table1"].rendered
-        parts = [f"{pct_ci(user[c].interval)} of the {c} ones (against {pct_ci(known[c].interval)} by the renderer's "
-                 f"camera)" for c in CLASSES if c in user and c in known]
-        return "on a user's path, with no camera, it labels " + " and ".join(parts) if parts else \
-            "no rendered video could be tracked on a user's path"
+        exact = self.numbers.exact.get("table1", {})
+        parts = [f"{pct_ci(user[c].interval)} of the {c} ones" for c in CLASSES if c in user]
+        if not parts:
+            return "no rendered video could be tracked on a user's path"
+        out = "on a user's path, with no camera, it labels " + " and ".join(parts)
+        if known:
+            out += " (by the renderer's camera: " + ", ".join(pct(known[c].value) for c in CLASSES if c in known)
+            out += "; from the throws' exact heights: " + ", ".join(pct(exact[c].value) for c in CLASSES
+                                                                      if c in exact) + ")" if exact else ")"
+        return out
 
     @property
     def sweep_words(self) -> str:
@@ -708,7 +722,7 @@ class RealWorld:
         default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
         worst = max((g for g in res if g != "all"), key=lambda g: res[g][default].cost.value)
         a = res["all"]
-        return (f"on {len(self.camera.clips)} clips from cameras the study never saw, the recommended model labels "
+        return (f"On {len(self.camera.clips)} clips from cameras the study never saw, the recommended model labels "
                 f"{pct_ci(a['exact'].accuracy)} of the throws right from their exact heights and "
                 f"{pct_ci(a[default].accuracy)} from a user's path ({default}): the camera costs "
                 f"{points(a[default].cost)}, most from the {worst} cameras ({points(res[worst][default].cost)})")
@@ -826,8 +840,10 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
               for key, (_, m) in models.items()}
     tracks_u = user_tracks(rendered, camera_cost.shape_of(runner.synth_config), progress=False)
     user = {key: classify(m, rendered, tracks_u, progress=False) for key, (_, m) in models.items()}
+    tracks_x = truth_tracks(rendered)
+    exact = {key: classify(m, rendered, tracks_x, progress=False) for key, (_, m) in models.items()}
     cs = camera_sweep(runner, rec)
-    numbers = reported(rec, {key: (models[key][0], *labels[key]) for key in models}, user, cs)
+    numbers = reported(rec, {key: (models[key][0], *labels[key]) for key in models}, user, cs, exact)
     classified = numbers.models
 
     light = next(v for v in rendered if v.label == "light")
@@ -850,26 +866,31 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
         scale_sweep(tm, rendered, real, tracks_r, tracks_q),
         n_rendered=n, n_real=len(real), model_frames=tm.n_frames, model_seconds=f"{tm.n_frames / tm.fps:g}",
         render_size=f"{rcfg.width}×{rcfg.height}", scale_err=pct(scale_error(tracks_r.values(), true_scale(rcfg))),
-        user_table=_user_table({models[k][0]: (labels[k][0], user[k]) for k in models}), camera=cs,
+        user_table=_user_table({models[k][0]: (exact[k], labels[k][0], user[k]) for k in models}), camera=cs,
         sweep_acc_table=_sweep_table(cs), sweep_heights_table=_heights_table(cs),
         sweep_models_table=_candidates_sweep_table(cs), drag_table=_drag_table(cs))
 
 
 def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Label], Sequence[Label]]],
-             user: dict[ModelKey, Sequence[Label]] | None = None, cs: CameraSweep | None = None) -> Numbers:
+             user: dict[ModelKey, Sequence[Label]] | None = None, cs: CameraSweep | None = None,
+             exact: dict[ModelKey, Sequence[Label]] | None = None) -> Numbers:
     """What the chapter reports: each candidate's validation accuracy (``rec``), the paper's figures judged,
     each model's accuracy per class from its ``labels`` (model key -> (its name, its labels of the rendered
     videos, of the real clips)), its labels of the rendered videos on a user's path (``user``), and the camera
     sweep (``cs``)."""
     judged = _figures()
     why = verdicts.not_comparable(WHY_NOT_COMPARABLE["rendered"])
-    on_user = {key: {c: number(iv, f"rendered {c} videos classified correctly on a user's path, {labels[key][0]}",
-                               paper=paper.REAL_WORLD[c], decision=why)
-                     for c, iv in per_class_interval(got).items() if iv is not None}
-               for key, got in (user or {}).items()}
+
+    def per_class(got: dict[ModelKey, Sequence[Label]] | None, how: str) -> dict[ModelKey, dict[Class, Number]]:
+        return {key: {c: number(iv, f"rendered {c} videos classified correctly {how}, {labels[key][0]}",  # type: ignore[misc]
+                                paper=paper.REAL_WORLD[c], decision=why)
+                      for c, iv in per_class_interval(ls).items() if iv is not None}
+                for key, ls in (got or {}).items()}
+
     return Numbers(_candidates(rec), judged["figure1"], judged["figure5"], judged["figure6"],
                    {key: _classified(name, rendered, real) for key, (name, rendered, real) in labels.items()},
-                   on_user, None if cs is None else _sweep_numbers(cs))  # type: ignore[arg-type]
+                   per_class(user, "on a user's path"), per_class(exact, "from their exact heights"),
+                   None if cs is None else _sweep_numbers(cs))
 
 
 def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
@@ -908,17 +929,20 @@ def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered
                         "verdict": "paper vs ours", "real": "ours, real [95 % Wilson]"})
 
 
-def _user_table(models: dict[str, tuple[Sequence[Label], Sequence[Label]]]) -> Table:
-    """Each model (by name: its labels of the rendered videos by the known camera, and by a user's path) per
-    class."""
+def _user_table(models: dict[str, tuple[Sequence[Label], Sequence[Label], Sequence[Label]]]) -> Table:
+    """Each model (by name: its labels of the rendered videos from their exact heights, by the renderer's camera,
+    and by a user's path) per class, with the videos right as counts."""
     rows = []
-    for name, (known, user) in models.items():
-        a, b = per_class_interval(known), per_class_interval(user)
+    for name, labels in models.items():
+        ivs = [per_class_interval(got) for got in labels]
         for c in CLASSES:
-            rows.append({"model": name, "class": c, "known": _pct_ci(a[c]), "user": _pct_ci(b[c]),
-                         "n": f"{sum(r.correct for r in user if r.label == c)} / {sum(r.label == c for r in user)}"})
-    return Table(rows, {"model": "model", "class": "class", "known": "the renderer's camera [95 % Wilson]",
-                        "user": "a user's path, no camera [95 % Wilson]", "n": "right on the user's path"})
+            row = {"model": name, "class": c}
+            for key, got, iv in zip(("exact", "known", "user"), labels, ivs):
+                right, n = sum(r.correct for r in got if r.label == c), sum(r.label == c for r in got)
+                row[key] = f"{right} / {n}, {_pct_ci(iv[c])}"
+            rows.append(row)
+    return Table(rows, {"model": "model", "class": "class", "exact": "exact heights (the renderer's truth)",
+                        "known": "the renderer's camera", "user": "a user's path, no camera"})
 
 
 def _real_table(labels: Sequence[Label]) -> Table:

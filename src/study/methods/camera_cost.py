@@ -30,6 +30,7 @@ from study.core.progress import Progress
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.methods import sweep
 from study.methods.sweep import Clip
+from study.methods.videos import Video
 from study.see import geometry, render, track
 from study.see.gaps import set_scale
 from study.see.scale import ObjectShape, read_scale
@@ -105,14 +106,21 @@ def heights(clip: Clip, shape: ObjectShape) -> Heights:
     return Heights(exact, paths, tracks)
 
 
+def truth_trajectory(video: Video, fps: float | None = None) -> Trajectory:
+    """A rendered video's true centre as a trajectory in metres (every frame measured, its heights exact): what a
+    perfect tracker and camera would give. ``fps``: the video's frame rate (None: from the truth's times)."""
+    truth = render.read_truth(video.truth)
+    n = len(truth["t"])
+    rate = fps if fps is not None else float(1 / np.median(np.diff(truth["t"])))
+    return Trajectory(t=truth["t"], u=truth["u"], v=truth["v"], status=np.ones(n, np.int8),
+                      segment=np.zeros(n, np.int32), confidence=np.ones(n), diameter=np.full(n, np.nan),
+                      fps=rate, source=video.truth, units="m", z=truth["z"], ground_z=video.rest_height)
+
+
 def exact_input(clip: Clip, fps: float, n_frames: int) -> np.ndarray:
     """(n_frames, 3) float32: the clip's true centre heights as the model reads them (z only), resampled to
     ``fps``, metres."""
-    truth = render.read_truth(clip.video.truth)
-    n = len(truth["t"])
-    traj = Trajectory(t=truth["t"], u=truth["u"], v=truth["v"], status=np.ones(n, np.int8),
-                      segment=np.zeros(n, np.int32), confidence=np.ones(n), diameter=np.full(n, np.nan),
-                      fps=clip.shot.fps, units="m", z=truth["z"], ground_z=clip.video.rest_height)
+    traj = truth_trajectory(clip.video, clip.shot.fps)
     return track.to_model_input(traj, fps, n_frames, rest_height=clip.video.rest_height)
 
 

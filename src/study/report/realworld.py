@@ -101,8 +101,11 @@ class Numbers(Reported):
     """The paper's Figure 6: frames of the real videos, tracked."""
     models: dict[ModelKey, Classified] = named("")
     """Each model's labels: ``realworld.table1.rendered.light`` and so on."""
-    user: dict[ModelKey, dict[Class, Number]] = named("user")
+    user: dict[ModelKey, dict[Class, Number]] = named("user", default_factory=dict)
     """Each model's labels of the rendered videos on a user's path (no camera: ``study classify VIDEO`` with the
     object's colour, shape and size): ``realworld.user.table1.light`` and so on."""
+    exact: dict[ModelKey, dict[Class, Number]] = named("exact", default_factory=dict)
+    """Each model's labels of the rendered videos from their exact heights (the renderer's truth: no tracker, no
+    camera): ``realworld.exact.table1.light`` and so on."""
     sweep: Sweep | None = None
     """The camera sweep (None: not run)."""
