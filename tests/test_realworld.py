@@ -222,8 +222,8 @@ def _iv(v: float, lo: float | None = None, hi: float | None = None) -> Interval:
 
 
 def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> realworld.CameraSweep:
-    """A camera sweep of two families made up here: exact 0.8 everywhere; the default path (rest size) 0.6, 0.7 on
-    'low' and 0.5 on 'high'; 'mean silhouette' ``best_path_gain`` above it; 10 clips a family."""
+    """A camera sweep of two families made up here: exact 0.8 everywhere; every path but gravity (the default among
+    them) 0.6, 0.7 on 'low' and 0.5 on 'high'; 'gravity' ``best_path_gain`` above it; 10 clips a family."""
     fams = ("low", "high")
     clips = tuple(SimpleNamespace(shot=SimpleNamespace(family=f, distance=4.0)) for f in fams for _ in range(10))
     per = {"all": 0.6, "low": 0.7, "high": 0.5}
@@ -231,12 +231,12 @@ def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> r
     for g, acc in per.items():
         rows = {"exact": camera_cost.PathResult(_iv(0.8), None, 0.0, 0.0, 0)}
         for k in camera_cost.PATHS:
-            a = acc + (best_path_gain if k == "mean silhouette" else 0.0)
+            a = acc + (best_path_gain if k == "gravity" else 0.0)
             rows[k] = camera_cost.PathResult(_iv(a), _iv(0.8 - a), 150.0, 100.0, 0)
         results[g] = rows
     correct = {k: np.zeros((3, len(clips)), bool) for k in ("exact", *camera_cost.PATHS)}
-    correct["rest size"][:, :12] = True  # 60 %
-    correct["mean silhouette"][:, : 12 + round(20 * best_path_gain)] = True
+    correct["mean silhouette"][:, :12] = True  # 60 %
+    correct["gravity"][:, : 12 + round(20 * best_path_gain)] = True
     m = camera_cost.Measured(results, correct, tuple(c.shot.family for c in clips))
     floors = {g: camera_cost.Floor(0.06, 0.062, 10) for g in per}
     drag = {"exact": _iv(0.75), **{k: _iv(0.5, 0.4, 0.6) for k in camera_cost.PATHS}}
@@ -250,7 +250,7 @@ def _result(numbers: realworld.Numbers, choice: str, cs: realworld.CameraSweep |
     empty = Table([], {})
     return realworld.RealWorld(numbers, (), (), _rec(choice), realworld.PixelError(2.14, 4.16, 0.987), (), (), (),
                                empty, empty, empty, empty, empty, 2, 0, 30, "1", "320×240", "8.4 %", empty,
-                               cs or _sweep(), empty, empty, empty, empty)
+                               cs or _sweep(), empty, empty, empty, empty, empty)
 
 
 def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_path):
@@ -271,7 +271,7 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     r = _result(n, "velocity, randomised", cs)
     assert r.sweep_words.startswith("On 20 clips") and "most from the high cameras" in r.sweep_words
     assert "interval that holds 0" in r.default_words and "the default stays" in r.default_words
-    assert "does not survive" in r.drag_words and "rest size" in r.drag_words
+    assert "does not survive" in r.drag_words and "mean silhouette path" in r.drag_words
     assert r.depth_words == "7.5 % of the median camera distance, 4.0 m, is 30 cm of depth"
     assert "the tracker is not what limits" in r.floor_words
     assert r.render_words.startswith("rendering the 20 clips took 10.0 CPU-minutes (5.5 minutes")
@@ -281,6 +281,9 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     clear = _result(n, "velocity, randomised", _sweep(best_path_gain=0.5, drag_rest=_iv(0.9)))
     assert "interval clear of 0" in clear.default_words and "should default to it" in clear.default_words
     assert "survives every path" in clear.drag_words
+    t = realworld._render_heights_table({k: (30.0, 20.0) for k in camera_cost.PATHS}, cs).rows
+    assert [r["path"] for r in t if "(default)" in r["path"]] == ["mean silhouette (default)"]
+    assert t[0]["book"] == "20 (30)" and t[0]["sweep"] == "100 (150)"
 
 
 def test_the_sentences_follow_the_numbers():

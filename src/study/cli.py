@@ -224,7 +224,7 @@ def _add_tracker_options(p: argparse.ArgumentParser) -> None:
 
 SCALE_FROM = ("rest", "mean", "gravity")
 """``study.see.scale.SCALE_FROM``, spelt out so that ``--help`` imports no numerics (a test keeps them equal)."""
-SCALE_FROM_DEFAULT = "rest"
+SCALE_FROM_DEFAULT = "mean"
 """How the command line reads the scale unless told."""
 
 

@@ -610,6 +610,18 @@ def _candidates_sweep_table(cs: CameraSweep) -> Table:
                         "best": "best path"})
 
 
+def _render_heights_table(render_heights: dict[str, tuple[float, float]], cs: CameraSweep) -> Table:
+    """Each path's height error (median removed, raw in brackets), on the book's renders and on the sweep."""
+    def mm(pair: tuple[float, float]) -> str:
+        return "—" if math.isnan(pair[0]) else f"{pair[1]:.0f} ({pair[0]:.0f})"
+
+    sweep_all = cs.recommended.results["all"]
+    rows = [{"path": k + (" (default)" if SCALE_PATH.get(k) == scale.DEFAULT else ""), "book": mm(render_heights[k]),
+             "sweep": mm((sweep_all[k].rms_mm, sweep_all[k].rms_centred_mm))} for k in camera_cost.PATHS]
+    return Table(rows, {"path": "path", "book": "the book's renders: mm RMS, median removed (raw)",
+                        "sweep": "the camera sweep: the same"})
+
+
 def _drag_table(cs: CameraSweep) -> Table:
     rows = [{"path": k, "acc": pct_ci(iv)} for k, iv in cs.drag.items()]
     return Table(rows, {"path": "heights", "acc": "drag rule's accuracy on the sweep [95 % CI]"})
@@ -677,6 +689,8 @@ class RealWorld:
     """Every candidate on the sweep, pooled."""
     drag_table: Table
     """The drag rule on the sweep's heights, by path."""
+    heights_table: Table
+    """Each path's height error on the book's renders and on the camera sweep, pooled."""
 
     # Sentences whose words depend on the numbers -------------------------------------------------
 
@@ -838,7 +852,9 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
         models["recommended"] = (f"recommended ({rec.choice})", rec.model)
     labels = {key: (classify(m, rendered, tracks_r, progress=False), classify(m, real, tracks_q, progress=False))
               for key, (_, m) in models.items()}
-    tracks_u = user_tracks(rendered, camera_cost.shape_of(runner.synth_config), progress=False)
+    shape = camera_cost.shape_of(runner.synth_config)
+    tracks_u = user_tracks(rendered, shape, progress=False)
+    render_heights = camera_cost.height_errors([camera_cost.video_heights(v, shape) for v in rendered])
     user = {key: classify(m, rendered, tracks_u, progress=False) for key, (_, m) in models.items()}
     tracks_x = truth_tracks(rendered)
     exact = {key: classify(m, rendered, tracks_x, progress=False) for key, (_, m) in models.items()}
@@ -868,7 +884,8 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
         render_size=f"{rcfg.width}×{rcfg.height}", scale_err=pct(scale_error(tracks_r.values(), true_scale(rcfg))),
         user_table=_user_table({models[k][0]: (exact[k], labels[k][0], user[k]) for k in models}), camera=cs,
         sweep_acc_table=_sweep_table(cs), sweep_heights_table=_heights_table(cs),
-        sweep_models_table=_candidates_sweep_table(cs), drag_table=_drag_table(cs))
+        sweep_models_table=_candidates_sweep_table(cs), drag_table=_drag_table(cs),
+        heights_table=_render_heights_table(render_heights, cs))
 
 
 def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Label], Sequence[Label]]],

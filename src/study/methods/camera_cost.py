@@ -83,7 +83,11 @@ class Heights:
 def heights(clip: Clip, shape: ObjectShape) -> Heights:
     """Track ``clip`` once (pixels) and turn it into heights by every path of :data:`PATHS`, for an object of
     ``shape``."""
-    v = clip.video
+    return video_heights(clip.video, shape)
+
+
+def video_heights(v: Video, shape: ObjectShape) -> Heights:
+    """:func:`heights` of any rendered video (one with ground truth)."""
     truth = render.read_truth(v.truth)
     rest = v.rest_height
     exact = truth["z"] - rest
@@ -167,6 +171,21 @@ def floors(clips: Sequence[Clip], tracked: Sequence[Heights]) -> dict[str, Floor
         rows["all"].append(pair)
         rows.setdefault(clip.shot.family, []).append(pair)
     return {g: Floor(*np.sqrt(np.mean(np.square(r), axis=0)).tolist(), len(r)) for g, r in rows.items()}
+
+
+def height_errors(tracked: Sequence[Heights]) -> dict[str, tuple[float, float]]:
+    """Each path's height error over ``tracked`` videos: path -> (root-mean-square over every frame with a height,
+    the same after removing each video's median error), millimetres (NaN for a path with no heights)."""
+    out = {}
+    for k in PATHS:
+        e = [(h.paths[k] - h.exact)[np.isfinite(h.paths[k])] for h in tracked if not isinstance(h.paths[k], str)]
+        e = [x for x in e if len(x)]
+        if not e:
+            out[k] = (math.nan, math.nan)
+            continue
+        raw, centred = np.concatenate(e), np.concatenate([x - np.median(x) for x in e])
+        out[k] = (1000 * float(np.sqrt(np.mean(raw**2))), 1000 * float(np.sqrt(np.mean(centred**2))))
+    return out
 
 
 @dataclass(frozen=True)

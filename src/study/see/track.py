@@ -24,7 +24,7 @@ from study.see.config import COLORS, TrackConfig, parse_hsv
 from study.see.detect import detect_all
 from study.see.gaps import fill_gaps, resample, set_camera, set_scale
 from study.see.overlay import write_overlay
-from study.see.scale import ObjectShape, read_scale
+from study.see.scale import DEFAULT, ObjectShape, read_scale
 from study.see.smooth import smooth
 from study.see.trackfile import read_csv, write_csv
 from study.see.trajectory import STATUS, Trajectory
@@ -45,7 +45,7 @@ def track_video(
     depth: float | np.ndarray | None = None,
     rest_height: float = 0.0,
     shape: ObjectShape | None = None,
-    scale_from: str = "rest",
+    scale_from: str = DEFAULT,
 ) -> Trajectory:
     """Track, fill short gaps, split at long ones, smooth between bounces if ``cfg.smooth`` asks, and turn pixels
     into heights: the whole pipeline for one video.
@@ -54,7 +54,7 @@ def track_video(
     number, or one per frame), heights come from the camera's geometry (``study.see.gaps.set_camera``: its tilt
     and the object's depth, no scale assumed), above ``rest_height``; else from one scale
     (``study.see.gaps.set_scale``): ``metres_per_pixel``; or read off the blob of an object of ``shape``
-    (``study.see.scale.read_scale``, at rest or as its mean over the video as ``scale_from`` says); or
+    (``study.see.scale.read_scale``, at rest, as its mean over the video or by gravity, as ``scale_from`` says); or
     ``object_size`` (a ball's diameter, metres) over the blob's size at rest."""
     cfg = cfg or TrackConfig()
     traj = fill_gaps(detect_all(path, cfg), cfg.max_gap)
