@@ -4,6 +4,7 @@ with one line naming the path, exits 2 and leaves nothing behind; `--help` costs
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -119,20 +120,42 @@ def test_help_does_not_import_torch():
     assert out.strip() == "False"
 
 
+def test_the_scale_readings_offered_are_the_package_s():
+    from study.see import scale
+
+    assert cli.SCALE_FROM == scale.SCALE_FROM and cli.SCALE_FROM_DEFAULT == scale.DEFAULT in scale.SCALE_FROM
+
+
 @pytest.mark.slow  # trains a tiny model and tracks a rendered video
-def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, small_video, capsys):
+def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, small_video, capsys, monkeypatch):
     out = tmp_path / "v"
     assert cli.main(["train", "--data", str(dataset_file), "--length", "0.5", "--epochs", "1", "--inputs", "velocity",
                      "--out", str(out), "--no-progress"]) == 0
     capsys.readouterr()
     assert json.loads((out / "config.json").read_text())["inputs"] == "velocity"
-    assert cli.main(["track", str(small_video), "--color", "orange", "--object-size", "0.2", "--out",
+    assert cli.main(["track", str(small_video), "--color", "orange", "--object-size", "0.2", "--object-shape", "box", "--out",
                      str(tmp_path / "t.csv"), "--no-progress"]) == 0
     for source in (tmp_path / "t.csv", small_video):
         assert cli.main(["classify", str(source), "--model", str(out), "--color", "orange", "--object-size", "0.2",
-                         "--no-progress"]) == 0
-        line = capsys.readouterr().out.strip().splitlines()[-1]
+                         "--object-shape", "box", "--scale-from", "mean", "--no-progress"]) == 0
+        line, note = capsys.readouterr().out.strip().splitlines()[-2:]
         assert line.startswith(f"{source}: ") and ("light (p = " in line or "heavy (p = " in line), line
+        assert note.startswith("  assumed: ") and "mm/px" in note and "frames found" in note, note
+    # the user's path reads the video and the flags only: no render truth, no manifest, no camera beside it
+    alone = tmp_path / "alone" / "clip.mp4"
+    alone.parent.mkdir()
+    shutil.copy(small_video, alone)
+    from study.methods import videos
+    from study.see import camera
+
+    def no(*a, **k):
+        raise AssertionError("the user's path read something other than the video and its flags")
+
+    for where, name in ((render, "read_truth"), (videos, "read_manifest"), (camera.Camera, "heights")):
+        monkeypatch.setattr(where, name, no)
+    assert cli.main(["classify", str(alone), "--model", str(out), "--color", "orange", "--object-size", "0.2",
+                     "--object-shape", "box", "--no-progress"]) == 0
+    assert capsys.readouterr().out.startswith(f"{alone}: ")
 
 
 def test_classify_without_a_model_and_without_a_build_says_how_to_get_one(tmp_path, capsys):
@@ -173,3 +196,13 @@ def test_classify_without_a_model_uses_the_builds_recommended_one(tmp_path, data
     shutil.rmtree(moved / "models")
     assert cli.main(["classify", str(csv), "--data-dir", str(moved)]) == 2
     assert "which is gone" in one_error_line(capsys)
+
+
+@pytest.mark.parametrize("args, why", [(["--object-shape", "box", "--object-size", "0.1", "0.2"], "a box takes 1 or 3"),
+                                       (["--object-size", "-0.2"], "sphere size (metres)")])
+def test_a_shape_that_does_not_fit_its_sizes_is_one_line_and_exit_2(tmp_path, capsys, args, why):
+    video = tmp_path / "clip.mp4"
+    video.write_bytes(b"not read: the shape is checked first")
+    rc = cli.main(["track", str(video), "--color", "orange", *args, "--no-progress"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and why in err[0], err

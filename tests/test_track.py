@@ -14,7 +14,8 @@ from study import cli
 from study.chapters import realworld
 from study.core.errors import ConfigError, TrackingError, VideoError
 from study.learn import train
-from study.see import render, track, video
+from study.see import render, scale, track, video
+from study.see.scale import ObjectShape
 from study.simulate import measure
 
 REAL = realworld.real_clips_dir()
@@ -230,12 +231,13 @@ def test_cli_classify_video_and_csv(rendered, tmp_path, z_model, capsys):
     rc = cli.main(["classify", "--model", str(folder), str(rendered.video), "--color", "orange",
                    "--object-size", "0.2", "--no-progress"])
     out = capsys.readouterr().out.strip().splitlines()
-    traj = track.track_video(rendered.video, FAST, object_size=0.2)
+    traj = track.track_video(rendered.video, FAST, shape=ObjectShape("sphere", (0.2,)), scale_from=scale.DEFAULT)
     x = track.to_model_input(traj, tm.fps, tm.n_frames, rest_height=0.1)
     assert x[:, 2].max() > 0.6  # metres: the box was thrown from 1 m
     p = tm.predict_proba(x[None])[0]
     k = int(p.argmax())
-    assert rc == 0 and out == [f"{rendered.video}: {('light', 'heavy')[k]} (p = {p[k]:.3f}; model {folder})"]
+    assert rc == 0 and out[0] == f"{rendered.video}: {('light', 'heavy')[k]} (p = {p[k]:.3f}; model {folder})"
+    assert len(out) == 2 and out[1].startswith("  assumed: scale ") and "RMS over" in out[1], "what it assumed"
     track.write_csv(track.track_video(rendered.video, FAST), tmp_path / "px.csv")
     rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv")])
     assert rc == 2 and "pixels" in capsys.readouterr().err  # a pixel CSV needs a scale

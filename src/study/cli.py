@@ -222,6 +222,37 @@ def _add_tracker_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
 
+SCALE_FROM = ("rest", "mean", "gravity")
+"""``study.see.scale.SCALE_FROM``, spelt out so that ``--help`` imports no numerics (a test keeps them equal)."""
+SCALE_FROM_DEFAULT = "mean"
+"""How the command line reads the scale unless told."""
+
+
+def _add_object_options(p: argparse.ArgumentParser, size_default: float | None) -> None:
+    """What was thrown, for the pixel -> metre scale (``study.see.scale``), shared by track and classify."""
+    p.add_argument("--object-size", type=float, nargs="+", default=None if size_default is None else [size_default],
+                   metavar="METRES",
+                   help="the object's size in metres: a ball's diameter; a box's edge (a cube) or its three edges; a "
+                   "cylinder's diameter and length" + ("" if size_default is None else " (default: %(default)s, a tennis ball)"))
+    p.add_argument("--object-shape", choices=("ball", "box", "cylinder"), default="ball",
+                   help="what was thrown (default: %(default)s); the scale reads the silhouette this shape shows")
+    p.add_argument("--scale-from", choices=SCALE_FROM, default=SCALE_FROM_DEFAULT,
+                   help="metres per pixel from the object's size in pixels at rest at the end of the video ('rest'), "
+                   "from its mean over the video ('mean': a tumbling box shows every side), or from gravity ('gravity': "
+                   "the free flights' fall, 9.81 m/s^2; needs the object seen in the air) (default: %(default)s)")
+    p.add_argument("--metres-per-pixel", type=float, default=None,
+                   help="the image scale at the object's distance, if you measured it; overrides --object-size")
+
+
+def _object_shape(a: argparse.Namespace):
+    """The ``ObjectShape`` the object options ask for, or None without --object-size."""
+    from study.see.scale import ObjectShape
+
+    if not a.object_size:
+        return None
+    return ObjectShape("sphere" if a.object_shape == "ball" else a.object_shape, tuple(a.object_size))
+
+
 def _track_config(a: argparse.Namespace):
     """The ``TrackConfig`` the tracker options of :func:`_add_tracker_options` ask for."""
     from study.see.config import TrackConfig
@@ -247,8 +278,7 @@ def _add_track(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory CSV here (frame, t_s, u_px, v_px, height, status, segment, confidence)")
     p.add_argument("--overlay", type=Path, default=None, help="write a copy of the video with the track drawn (.mp4)")
-    p.add_argument("--object-size", type=float, default=None, help="the object's diameter in metres (tennis ball 0.067): heights in metres")
-    p.add_argument("--metres-per-pixel", type=float, default=None, help="image scale at the object's distance: heights in metres")
+    _add_object_options(p, None)
     p.add_argument("--ground-v", type=float, default=None, help="image row of the object's centre on the ground (default: its lowest position)")
 
     def run(a: argparse.Namespace) -> int:
@@ -258,8 +288,8 @@ def _add_track(sub: argparse._SubParsersAction) -> None:
             for path, what in ((a.out, "trajectory CSV"), (a.overlay, "overlay video")):
                 if path is not None:
                     check_writable(path, what)  # before the tracking, not after it
-            traj = track.track_video(a.video, _track_config(a), ground_v=a.ground_v, object_size=a.object_size,
-                                     metres_per_pixel=a.metres_per_pixel)
+            traj = track.track_video(a.video, _track_config(a), ground_v=a.ground_v, shape=_object_shape(a),
+                                     scale_from=a.scale_from, metres_per_pixel=a.metres_per_pixel)
             if a.out:
                 track.write_csv(traj, a.out)
             if a.overlay:
@@ -322,11 +352,9 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                    help="data folder whose recommended model to use without --model (default: $STUDY_DATA_DIR, "
                    "else data/ here)")
     _add_tracker_options(p)
-    p.add_argument("--object-size", type=float, default=0.067,
-                   help="the object's diameter in metres, for the pixel->metre scale (default: %(default)s, a tennis ball)")
-    p.add_argument("--metres-per-pixel", type=float, default=None, help="image scale, overrides --object-size")
+    _add_object_options(p, 0.067)
     p.add_argument("--rest-height", type=float, default=None,
-                   help="height of the object's centre at rest, metres (default: half of --object-size)")
+                   help="height of the object's centre at rest, metres (default: from --object-size and --object-shape)")
 
     def run(a: argparse.Namespace) -> int:
         from study import CLASSES
@@ -351,6 +379,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                 f"{which} was trained on {tm.dims!r}; one camera gives only the height: "
                 "use a model trained on 'z' (the paper's real-world test does)"
             )
+        shape = _object_shape(a)
         if a.input.suffix.lower() == ".csv":
             traj = track.read_csv(a.input)
             if a.metres_per_pixel is not None:
@@ -360,13 +389,24 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                     f"trajectory CSV {a.input}: heights are in pixels; give --metres-per-pixel, or re-track "
                     "the video with --object-size, so the model sees metres"
                 )
+            scale = f"heights as the CSV holds them ({traj.height_per_pixel * 1000:.2f} mm/px)"
         else:
-            traj = track.track_video(a.input, _track_config(a), object_size=a.object_size, metres_per_pixel=a.metres_per_pixel)
-        rest = a.object_size / 2 if a.rest_height is None else a.rest_height
+            from study.see.scale import read_scale
+
+            traj = track.track_video(a.input, _track_config(a), shape=shape, scale_from=a.scale_from,
+                                     metres_per_pixel=a.metres_per_pixel)
+            scale = (f"scale {a.metres_per_pixel * 1000:.2f} mm/px as given" if a.metres_per_pixel is not None
+                     else read_scale(traj, shape, a.scale_from).note())
+        rest = a.rest_height if a.rest_height is not None else shape.rest_height() if shape else 0.0
         x = track.to_model_input(traj, tm.fps, tm.n_frames, rest_height=rest)
         p_cls = tm.predict_proba(x[None])[0]
         k = int(p_cls.argmax())
+        piece = traj.longest()
         print(f"{a.input}: {CLASSES[k]} (p = {float(p_cls[k]):.3f}; {which})")
+        print(f"  assumed: {scale}; the ground at the lowest centre (row {traj.ground_v:.0f}), one scale for the "
+              f"whole video (the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m "
+              f"up at rest; read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} "
+              f"frames found, {len(traj.segments())} piece(s)")
         return 0
 
     p.set_defaults(run=run)

@@ -334,6 +334,9 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
                 # The kernel's own log (not the cells' output) only warns that its local TCP link is
                 # unencrypted; errors still show.
                 extra_arguments=["--IPKernelApp.log_level=ERROR"],
+                # A cell's output may reach the client seconds after its reply on a loaded machine (two chapters,
+                # a render and training on two cores); nbclient's 4 s wait for it then failed the chapter.
+                iopub_timeout=120,
                 kernel_manager_class=_kernel_manager(_kernel_environment(ticket_file)),
             )
     except PapermillExecutionError as e:

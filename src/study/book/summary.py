@@ -32,6 +32,7 @@ from study.report import (
 from study.report.reported import Leaf, Number, Reported, Verdict
 from study.report.text import Bullets, Table, fmt, fmt_value, pct
 from study.runs import paper
+from study.see.scale import DEFAULT as SCALE_DEFAULT
 
 
 @dataclass(frozen=True)
@@ -241,6 +242,8 @@ class Findings:
     """The best learner through the calibrated camera: ``air_on``, ``air_off``."""
     camera_error: Number
     """The calibrated camera's height error, metres."""
+    sweep: realworld.Sweep | None = None
+    """The camera sweep: a camera nobody measured (None: not in the results file)."""
 
     @classmethod
     def of(cls, c: Chapters, rows: tuple[Row, ...]) -> Findings:
@@ -252,7 +255,7 @@ class Findings:
                    {d: c.engine.table1[d].paper_way for d in table1.ORDER},  # type: ignore[index]
                    {a: getattr(m.ceiling, a) for a in airs}, c.cues.drag_rule.exact,
                    {a: m.learners["peephole_positions"][a]["exact"] for a in airs},  # type: ignore[index]
-                   camera, m.noise["calibrated"])  # type: ignore[index]
+                   camera, m.noise["calibrated"], c.realworld.sweep)  # type: ignore[index]
 
     @property
     def text(self) -> str:
@@ -274,7 +277,20 @@ class Findings:
                 f"{fmt(self.drag_rule)}; the paper's network reaches {fmt(self.network['air_on'])} with air and "
                 f"{fmt(self.network['air_off'])} without. A camera leaves less: through the calibrated camera "
                 f"({_mm(self.camera_error)} of height error) the best learner scores {fmt(on.accuracy)} with air "
-                f"({on.name}) and {fmt(off.accuracy)} without ({off.name}).")
+                f"({on.name}) and {fmt(off.accuracy)} without ({off.name})." + self._user_camera)
+
+    @property
+    def _user_camera(self) -> str:
+        """The camera sweep in one sentence ('' without it)."""
+        if self.sweep is None:
+            return ""
+        a, d = self.sweep.groups["all"].paths, self.sweep.drag  # type: ignore[index]
+        k = SCALE_DEFAULT
+        return (f" A camera nobody measured leaves less still: on {fmt_value(self.sweep.groups['all'].clips.value, 'count')} "  # type: ignore[index]
+                f"clips from random cameras, the recommended model scores {fmt(a['exact'].accuracy)} from the throws' "
+                f"exact heights and {fmt(a[k].accuracy)} from what a user's video gives (heights off by "
+                f"{fmt_value(a[k].heights_mm.value, 'mm') if a[k].heights_mm else '—'} RMS), and the drag rule falls "
+                f"from {fmt(d['exact'])} to {fmt(d[k])}.")
 
 
 

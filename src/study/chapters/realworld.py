@@ -21,7 +21,11 @@ The pipeline, video by video:
 3. Table 1's Z model (and the recommended one, where it differs) on every video, per class with Wilson
    intervals beside the paper's 93 % and 100 % (``study.runs.paper.REAL_WORLD``), every candidate's
    label for every video, and how the labels move with a wrong scale (:data:`FACTORS`);
-4. the data of the paper's Figures 1, 5 and 6 (:class:`Filmstrip`, :class:`HeightSeries`, :class:`TrackView`).
+4. the data of the paper's Figures 1, 5 and 6 (:class:`Filmstrip`, :class:`HeightSeries`, :class:`TrackView`);
+5. a user's camera: the rendered videos again on the path ``study classify VIDEO`` takes with no camera
+   (:func:`user_tracks`), and the camera sweep (:func:`camera_sweep`, :class:`CameraSweep`): throws filmed from
+   cameras the study never saw, their heights had by every path of ``study.methods.camera_cost`` and classified
+   by every candidate, beside the same throws' exact heights.
 
 :class:`Numbers` is what the chapter reports, under the names ``realworld.table1.rendered.light`` and so on.
 """
@@ -43,7 +47,7 @@ from study.learn import train
 from study.learn.config import Inputs, TrainConfig
 from study.learn.metrics import Interval, hierarchical_bootstrap, wilson
 from study.learn.trained import Ensemble
-from study.methods import calibration, tracker
+from study.methods import calibration, camera_cost, sweep, tracker
 from study.methods.videos import (  # noqa: F401  (re-exported: the chapter's videos)
     REAL_CLIPS_DEFAULT,
     REAL_CLIPS_ENV,
@@ -63,14 +67,19 @@ from study.report.realworld import (
     Classified,
     ModelKey,
     Numbers,
+    PathKey,
+    Sweep,
+    SweepGroup,
+    SweepPath,
     Training,
 )
-from study.report.reported import Number, Verdict, number
-from study.report.text import Table, pct, pct_ci
+from study.report.reported import Number, Verdict, count, number
+from study.report.text import Table, pct, pct_ci, points
 from study.runs import paper, records
 from study.runs import recommended as saved
 from study.runs.stats import correct_of
-from study.see import render, track, video
+from study.see import render, scale, track, video
+from study.see.scale import ObjectShape
 from study.simulate import measure, observe
 
 if TYPE_CHECKING:
@@ -119,6 +128,31 @@ def track_all(videos: Sequence[Video], progress: bool = True) -> dict[str, Track
                 out[v.path.name] = Tracked(None, str(e))
             bar.update()
     return out
+
+
+def user_tracks(videos: Sequence[Video], shape: ObjectShape | None = None,
+                progress: bool = True) -> dict[str, Tracked]:
+    """Every video tracked as ``study classify VIDEO --color C --object-size D`` tracks it: no camera, no ground
+    truth; the pixel scale read the default way (``study.see.scale.DEFAULT``) off an object of ``shape`` (None: a
+    ball of each video's ``object_size``)."""
+    out: dict[str, Tracked] = {}
+    with Progress("track videos (user's path)", total=len(videos), show=progress, unit="video") as bar:
+        for v in videos:
+            got = shape or ObjectShape("sphere", (v.object_size,))
+            try:
+                cfg = track.TrackConfig(color=v.color, progress=False)
+                out[v.path.name] = Tracked(track.track_video(v.path, cfg, shape=got, scale_from=scale.DEFAULT))
+            except StudyError as e:
+                out[v.path.name] = Tracked(None, str(e))
+            bar.update()
+    return out
+
+
+def truth_tracks(videos: Sequence[Video]) -> dict[str, Tracked]:
+    """Every rendered video's true centre (:func:`study.methods.camera_cost.truth_trajectory`): what the model
+    answers from the throw's exact heights, with no tracker and no camera in the way."""
+    return {v.path.name: Tracked(camera_cost.truth_trajectory(v)) if v.truth is not None else
+            Tracked(None, "no ground truth") for v in videos}
 
 
 @dataclass(frozen=True)
@@ -457,6 +491,147 @@ def _figures() -> dict[str, Verdict]:
 
 
 # ---------------------------------------------------------------------------------------------
+# The camera sweep: a camera nobody measured (study.methods.sweep, study.methods.camera_cost)
+
+PATH_KEYS: dict[str, PathKey] = {"exact": "exact", "rest size": "rest", "mean silhouette": "mean",
+                                 "gravity": "gravity", "geometry": "geometry"}
+"""Each path's name in the tables -> its key in the results file."""
+
+
+@dataclass(frozen=True)
+class CameraSweep:
+    """Held-aside throws filmed from cameras the study never saw, read by a user's paths and classified."""
+
+    clips: tuple[sweep.Clip, ...]
+    """The clips, family by family."""
+    measured: dict[str, camera_cost.Measured]
+    """Candidate name -> its seeds on every path (the recommended one among them)."""
+    choice: str
+    """The recommended candidate's name."""
+    floors: dict[str, camera_cost.Floor]
+    """Group -> the one-scale floor (true and tracked image rows)."""
+    drag: dict[str, Interval]
+    """Path -> the drag rule's accuracy on the clips."""
+    size_error: float
+    """Median relative error of one frame's blob diameter (:func:`study.methods.camera_cost.size_error`)."""
+    render_s: tuple[float, float, int]
+    """CPU seconds and wall seconds the clips took to render, and how many clips' times were recorded."""
+
+    @property
+    def recommended(self) -> camera_cost.Measured:
+        return self.measured[self.choice]
+
+
+def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) -> CameraSweep:
+    """The camera sweep on ``runner``'s preset (``preset.sweep_per_family`` clips a family, rendered once and
+    cached): every clip tracked once, turned into heights by every path, classified by every candidate of ``rec``
+    (its seeds), and the drag rule's threshold from the training throws applied to each path's heights."""
+    p, cfg = runner.preset, runner.synth_config
+    clips = sweep.sweep_set(cfg, per_family=p.sweep_per_family, seed=sweep.SWEEP_SEED,
+                            out_dir=runner.data_dir / "realworld", progress=progress,
+                            frame_scale=p.sweep_frame_scale, duration=p.length)
+    shape = camera_cost.shape_of(cfg)
+    tracked = camera_cost.track_clips(clips, shape, progress=progress)
+    measured = {name: camera_cost.measure(ens.members, clips, tracked) for name, ens in rec.models.items()}
+    first = rec.model.members[0]
+    fps, n = first.fps, first.n_frames
+    contact = cfg.shape.bounding_radius
+    ds = runner.dataset
+    f_train = measure.fall_acceleration(ds.train.x[:, : round(n * ds.fps / fps), 2], ds.fps, contact)
+    drag = camera_cost.drag_rule(f_train, ds.train.y, clips, tracked, fps, n, contact)
+    times = sweep.render_times(clips)
+    cpu, wall = (sum(t[k] for t in times.values()) for k in ("cpu_s", "wall_s"))
+    return CameraSweep(tuple(clips), measured, rec.choice, camera_cost.floors(clips, tracked), drag,
+                       camera_cost.size_error(clips, tracked, shape), (cpu, wall, len(times)))
+
+
+def _sweep_numbers(cs: CameraSweep) -> Sweep:
+    groups: dict[str, SweepGroup] = {}
+    for g, rows in cs.recommended.results.items():
+        paths = {PATH_KEYS[k]: SweepPath(
+            number(r.accuracy, f"camera sweep ({g}): recommended model's accuracy, heights {k}"),
+            None if math.isnan(r.rms_centred_mm) else
+            number(r.rms_centred_mm, f"camera sweep ({g}): height error after each clip's median, {k}", unit="mm"),
+            None if r.cost is None else number(r.cost, f"camera sweep ({g}): exact heights' accuracy minus {k}'s",
+                                               signed=True))
+            for k, r in rows.items()}
+        groups[g] = SweepGroup(count(sum(g in ("all", c.shot.family) for c in cs.clips), f"camera sweep ({g}): clips"),
+                               number(1000 * cs.floors[g].true_rows if g in cs.floors else math.nan,
+                                      f"camera sweep ({g}): least one-scale height error", unit="mm"), paths)
+    drag = {PATH_KEYS[k]: number(iv, f"camera sweep: drag rule's accuracy, heights {k}") for k, iv in cs.drag.items()}
+    cpu, _, timed = cs.render_s
+    return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]
+                 number(cpu, "camera sweep: CPU seconds to render the clips", unit="s") if timed == len(cs.clips)
+                 else None)
+
+
+def _sweep_table(cs: CameraSweep) -> Table:
+    """The recommended model per camera family: accuracy on the exact heights and by each path, with the
+    camera's cost."""
+    rows = []
+    for g, res in cs.recommended.results.items():
+        row = {"group": g, "clips": sum(g in ("all", c.shot.family) for c in cs.clips),
+               "exact": pct_ci(res["exact"].accuracy)}
+        for k in camera_cost.PATHS:
+            r = res[k]
+            row[k] = f"{pct(r.accuracy.value)} (cost {points(r.cost)})" + (f", {r.no_heights} without" if r.no_heights else "")
+        rows.append(row)
+    return Table(rows, {"group": "cameras", "clips": "clips", "exact": "exact heights [95 % CI]",
+                        **{k: f"{k} (exact minus it, points [95 % CI])" for k in camera_cost.PATHS}})
+
+
+def _heights_table(cs: CameraSweep) -> Table:
+    """Height error per camera family and path, and the one-scale floor."""
+    rows = []
+    for g, res in cs.recommended.results.items():
+        fl = cs.floors.get(g)
+        row = {"group": g, "floor": "—" if fl is None else f"{1000 * fl.true_rows:.0f}",
+               "tracked": "—" if fl is None else f"{1000 * fl.tracked_rows:.0f}"}
+        row |= {k: "—" if math.isnan(res[k].rms_mm) else f"{res[k].rms_centred_mm:.0f} ({res[k].rms_mm:.0f})"
+                for k in camera_cost.PATHS}
+        rows.append(row)
+    return Table(rows, {"group": "cameras", "floor": "one-scale floor, true rows (mm)",
+                        "tracked": "the same, tracked rows (mm)",
+                        **{k: f"{k}: mm RMS, median removed (raw)" for k in camera_cost.PATHS}})
+
+
+def _candidates_sweep_table(cs: CameraSweep) -> Table:
+    """Every candidate on the sweep, pooled: exact heights against the default path."""
+    default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+    rows = []
+    for name, m in cs.measured.items():
+        r = m.results["all"]
+        best = max(camera_cost.PATHS, key=lambda k: r[k].accuracy.value)
+        rows.append({"model": name + (" ✓" if name == cs.choice else ""), "exact": pct_ci(r["exact"].accuracy),
+                     "user": pct_ci(r[default].accuracy), "cost": points(r[default].cost),
+                     "best": f"{best}: {pct(r[best].accuracy.value)}"})
+    return Table(rows, {"model": "candidate (✓ recommended)", "exact": "exact heights [95 % CI]",
+                        "user": f"user's default path ({default}) [95 % CI]", "cost": "camera's cost, points [95 % CI]",
+                        "best": "best path"})
+
+
+def _render_heights_table(render_heights: dict[str, tuple[float, float]], cs: CameraSweep) -> Table:
+    """Each path's height error (median removed, raw in brackets), on the book's renders and on the sweep."""
+    def mm(pair: tuple[float, float]) -> str:
+        return "—" if math.isnan(pair[0]) else f"{pair[1]:.0f} ({pair[0]:.0f})"
+
+    sweep_all = cs.recommended.results["all"]
+    rows = [{"path": k + (" (default)" if SCALE_PATH.get(k) == scale.DEFAULT else ""), "book": mm(render_heights[k]),
+             "sweep": mm((sweep_all[k].rms_mm, sweep_all[k].rms_centred_mm))} for k in camera_cost.PATHS]
+    return Table(rows, {"path": "path", "book": "the book's renders: mm RMS, median removed (raw)",
+                        "sweep": "the camera sweep: the same"})
+
+
+def _drag_table(cs: CameraSweep) -> Table:
+    rows = [{"path": k, "acc": pct_ci(iv)} for k, iv in cs.drag.items()]
+    return Table(rows, {"path": "heights", "acc": "drag rule's accuracy on the sweep [95 % CI]"})
+
+
+SCALE_PATH = {"rest size": "rest", "mean silhouette": "mean", "gravity": "gravity"}
+"""The one-scale paths' names (``study.methods.camera_cost.PATHS``) -> ``study.see.scale.SCALE_FROM``."""
+
+
+# ---------------------------------------------------------------------------------------------
 # The chapter's result
 
 
@@ -502,6 +677,20 @@ class RealWorld:
     """Width × height of the rendered videos, pixels."""
     scale_err: str
     """Median relative error of the pixel scale read off the rendered object's apparent size."""
+    user_table: Table
+    """Each model on the rendered videos by the known camera and by a user's path, per class."""
+    camera: CameraSweep
+    """The camera sweep."""
+    sweep_acc_table: Table
+    """The recommended model per camera family, exact heights and each path."""
+    sweep_heights_table: Table
+    """Height error per camera family and path, and the one-scale floor."""
+    sweep_models_table: Table
+    """Every candidate on the sweep, pooled."""
+    drag_table: Table
+    """The drag rule on the sweep's heights, by path."""
+    heights_table: Table
+    """Each path's height error on the book's renders and on the camera sweep, pooled."""
 
     # Sentences whose words depend on the numbers -------------------------------------------------
 
@@ -522,6 +711,103 @@ class RealWorld:
         if "recommended" in self.numbers.models:
             return f"the recommended one, {self.recommendation.choice}"
         return "the recommended one, which is Table 1's model itself"
+
+    @property
+    def user_words(self) -> str:
+        """What Table 1's model does on the rendered videos with no camera, beside the known camera and the
+        throws' exact heights."""
+        user, known = self.numbers.user.get("table1", {}), self.numbers.models["table1"].rendered
+        exact = self.numbers.exact.get("table1", {})
+        parts = [f"{pct_ci(user[c].interval)} of the {c} ones" for c in CLASSES if c in user]
+        if not parts:
+            return "no rendered video could be tracked on a user's path"
+        out = "on a user's path, with no camera, it labels " + " and ".join(parts)
+        if known:
+            out += " (by the renderer's camera: " + ", ".join(pct(known[c].value) for c in CLASSES if c in known)
+            out += "; from the throws' exact heights: " + ", ".join(pct(exact[c].value) for c in CLASSES
+                                                                      if c in exact) + ")" if exact else ")"
+        return out
+
+    @property
+    def sweep_words(self) -> str:
+        """The camera sweep's answer in one sentence: the recommended model's accuracy on exact heights and by
+        the default path, pooled, and the family where the camera costs most."""
+        res = self.camera.recommended.results
+        default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+        worst = max((g for g in res if g != "all"), key=lambda g: res[g][default].cost.value)
+        a = res["all"]
+        return (f"On {len(self.camera.clips)} clips from cameras the study never saw, the recommended model labels "
+                f"{pct_ci(a['exact'].accuracy)} of the throws right from their exact heights and "
+                f"{pct_ci(a[default].accuracy)} from a user's path ({default}): the camera costs "
+                f"{points(a[default].cost)}, most from the {worst} cameras ({points(res[worst][default].cost)})")
+
+    @property
+    def drag_words(self) -> str:
+        """Whether the drag cue survives a user's camera: the drag rule's interval on each path against chance."""
+        d = self.camera.drag
+        default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+        at_chance = [k for k in camera_cost.PATHS if d[k].lo <= 0.5]
+        verdict = ("it does not survive: on " + ", ".join(at_chance) + " heights the rule's interval holds chance"
+                   if at_chance else "it survives every path (each interval above chance)")
+        return (f"the drag rule (one threshold on the first fall's acceleration, set on the training throws) gets "
+                f"{pct_ci(d['exact'])} of the sweep's throws from their exact heights and {pct_ci(d[default])} "
+                f"from the {default} path; {verdict}")
+
+    @property
+    def default_words(self) -> str:
+        """Which path a user should take: the best path's paired difference against the default."""
+        m = self.camera.recommended
+        res = m.results["all"]
+        default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+        best = max(camera_cost.PATHS, key=lambda k: res[k].accuracy.value)
+        if best == default:
+            return f"the default ({default}) is also the most accurate path on the sweep"
+        diff = m.difference(best, default)
+        if diff.lo <= 0 <= diff.hi:
+            return (f"the most accurate path, {best}, beats the default ({default}) by {points(diff)}, an "
+                    f"interval that holds 0: the paths cannot be told apart on these clips, and the default stays")
+        return (f"the most accurate path, {best}, beats the default ({default}) by {points(diff)}, an "
+                f"interval clear of 0: `study classify --scale-from` should default to it")
+
+    @property
+    def size_words(self) -> str:
+        """How far one frame's apparent size says where the object is."""
+        return pct(self.camera.size_error)
+
+    @property
+    def depth_words(self) -> str:
+        """What one frame's size error is in depth, at the sweep's median camera distance."""
+        d = float(np.median([c.shot.distance for c in self.camera.clips]))
+        return (f"{pct(self.camera.size_error)} of the median camera distance, {d:.1f} m, is "
+                f"{100 * self.camera.size_error * d:.0f} cm of depth")
+
+    @property
+    def floor_words(self) -> str:
+        """Whether the tracker's rows reach the one-scale floor the true rows do."""
+        f = self.camera.floors.get("all")
+        if f is None:
+            return "no clip was tracked"
+        close = f.tracked_rows <= f.true_rows + 0.005
+        return (f"the best line through the tracker's rows is {1000 * f.tracked_rows:.0f} mm against "
+                f"{1000 * f.true_rows:.0f} mm through the true ones: "
+                + ("the tracker is not what limits the heights" if close else
+                   "the tracker adds to the floor"))
+
+    @property
+    def models_words(self) -> str:
+        """The camera's cost to each candidate, by how it was trained."""
+        default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+        parts = [f"{name} {points(m.results['all'][default].cost)}" for name, m in self.camera.measured.items()]
+        return "the camera's cost in points, exact heights minus the default path: " + "; ".join(parts)
+
+    @property
+    def render_words(self) -> str:
+        cpu, wall, timed = self.camera.render_s
+        n = len(self.camera.clips)
+        if not timed:
+            return f"the {n} clips' rendering times were not recorded (rendered before they were kept)"
+        return (f"rendering the {n} clips took {cpu / 60:.1f} CPU-minutes ({wall / 60:.1f} minutes of wall time"
+                f"{'' if timed == n else f', for the {timed} clips timed'}), once: they are cached by key")
 
     @property
     def credits(self) -> Table:
@@ -566,7 +852,14 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
         models["recommended"] = (f"recommended ({rec.choice})", rec.model)
     labels = {key: (classify(m, rendered, tracks_r, progress=False), classify(m, real, tracks_q, progress=False))
               for key, (_, m) in models.items()}
-    numbers = reported(rec, {key: (models[key][0], *labels[key]) for key in models})
+    shape = camera_cost.shape_of(runner.synth_config)
+    tracks_u = user_tracks(rendered, shape, progress=False)
+    render_heights = camera_cost.height_errors([camera_cost.video_heights(v, shape) for v in rendered])
+    user = {key: classify(m, rendered, tracks_u, progress=False) for key, (_, m) in models.items()}
+    tracks_x = truth_tracks(rendered)
+    exact = {key: classify(m, rendered, tracks_x, progress=False) for key, (_, m) in models.items()}
+    cs = camera_sweep(runner, rec)
+    numbers = reported(rec, {key: (models[key][0], *labels[key]) for key in models}, user, cs, exact)
     classified = numbers.models
 
     light = next(v for v in rendered if v.label == "light")
@@ -588,17 +881,33 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
         _every_table(rec, rendered, real, tracks_r, tracks_q),
         scale_sweep(tm, rendered, real, tracks_r, tracks_q),
         n_rendered=n, n_real=len(real), model_frames=tm.n_frames, model_seconds=f"{tm.n_frames / tm.fps:g}",
-        render_size=f"{rcfg.width}×{rcfg.height}", scale_err=pct(scale_error(tracks_r.values(), true_scale(rcfg))))
+        render_size=f"{rcfg.width}×{rcfg.height}", scale_err=pct(scale_error(tracks_r.values(), true_scale(rcfg))),
+        user_table=_user_table({models[k][0]: (exact[k], labels[k][0], user[k]) for k in models}), camera=cs,
+        sweep_acc_table=_sweep_table(cs), sweep_heights_table=_heights_table(cs),
+        sweep_models_table=_candidates_sweep_table(cs), drag_table=_drag_table(cs),
+        heights_table=_render_heights_table(render_heights, cs))
 
 
-def reported(rec: Recommendation,
-             labels: dict[ModelKey, tuple[str, Sequence[Label], Sequence[Label]]]) -> Numbers:
-    """What the chapter reports: each candidate's validation accuracy (``rec``), the paper's figures judged, and
+def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Label], Sequence[Label]]],
+             user: dict[ModelKey, Sequence[Label]] | None = None, cs: CameraSweep | None = None,
+             exact: dict[ModelKey, Sequence[Label]] | None = None) -> Numbers:
+    """What the chapter reports: each candidate's validation accuracy (``rec``), the paper's figures judged,
     each model's accuracy per class from its ``labels`` (model key -> (its name, its labels of the rendered
-    videos, of the real clips))."""
+    videos, of the real clips)), its labels of the rendered videos on a user's path (``user``), and the camera
+    sweep (``cs``)."""
     judged = _figures()
+    why = verdicts.not_comparable(WHY_NOT_COMPARABLE["rendered"])
+
+    def per_class(got: dict[ModelKey, Sequence[Label]] | None, how: str) -> dict[ModelKey, dict[Class, Number]]:
+        return {key: {c: number(iv, f"rendered {c} videos classified correctly {how}, {labels[key][0]}",  # type: ignore[misc]
+                                paper=paper.REAL_WORLD[c], decision=why)
+                      for c, iv in per_class_interval(ls).items() if iv is not None}
+                for key, ls in (got or {}).items()}
+
     return Numbers(_candidates(rec), judged["figure1"], judged["figure5"], judged["figure6"],
-                   {key: _classified(name, rendered, real) for key, (name, rendered, real) in labels.items()})
+                   {key: _classified(name, rendered, real) for key, (name, rendered, real) in labels.items()},
+                   per_class(user, "on a user's path"), per_class(exact, "from their exact heights"),
+                   None if cs is None else _sweep_numbers(cs))
 
 
 def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
@@ -635,6 +944,22 @@ def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered
     return Table(rows, {"model": "model", "class": "class", "paper": "paper",
                         "rendered": f"ours, rendered ({n_rendered} per class) [95 % Wilson]",
                         "verdict": "paper vs ours", "real": "ours, real [95 % Wilson]"})
+
+
+def _user_table(models: dict[str, tuple[Sequence[Label], Sequence[Label], Sequence[Label]]]) -> Table:
+    """Each model (by name: its labels of the rendered videos from their exact heights, by the renderer's camera,
+    and by a user's path) per class, with the videos right as counts."""
+    rows = []
+    for name, labels in models.items():
+        ivs = [per_class_interval(got) for got in labels]
+        for c in CLASSES:
+            row = {"model": name, "class": c}
+            for key, got, iv in zip(("exact", "known", "user"), labels, ivs):
+                right, n = sum(r.correct for r in got if r.label == c), sum(r.label == c for r in got)
+                row[key] = f"{right} / {n}, {_pct_ci(iv[c])}"
+            rows.append(row)
+    return Table(rows, {"model": "model", "class": "class", "exact": "exact heights (the renderer's truth)",
+                        "known": "the renderer's camera", "user": "a user's path, no camera"})
 
 
 def _real_table(labels: Sequence[Label]) -> Table:

@@ -39,6 +39,53 @@ class Classified(Reported):
     """The real clips (only the classes they hold)."""
 
 
+PathKey = Literal["exact", "rest", "mean", "gravity", "geometry"]
+"""How a clip's heights were had: exactly (the renderer's truth), or by one of a user's paths without a camera
+(``study.methods.camera_cost.PATHS``: the rest size, the mean silhouette, gravity, the fitted geometry)."""
+
+Group = Literal["all", "square-on", "low", "oblique", "high"]
+"""The camera sweep's clips pooled, or one camera family (``study.methods.sweep.FAMILIES``)."""
+
+
+@dataclass(frozen=True)
+class SweepPath(Reported):
+    """One path on a group of the camera sweep's clips, read by the recommended model."""
+
+    accuracy: Number
+    """Accuracy over the clips and the model's seeds (a clip without heights counts as a miss)."""
+    heights_mm: Number | None = None
+    """Root-mean-square height error after removing each clip's median error, millimetres (0: exact; None: the
+    path turned no clip into heights)."""
+    cost: Number | None = None
+    """The exact heights' accuracy minus this path's, paired over clips and seeds, points (None: exact)."""
+
+
+@dataclass(frozen=True)
+class SweepGroup(Reported):
+    """A group of the camera sweep's clips."""
+
+    clips: Number
+    """Clips in the group."""
+    floor_mm: Number
+    """The least height error any one-scale path can reach on them, millimetres RMS (true image rows)."""
+    paths: dict[PathKey, SweepPath] = named("")
+    """Each path, by name."""
+
+
+@dataclass(frozen=True)
+class Sweep(Reported):
+    """What a camera nobody measured leaves of the heights and of the answer (the camera sweep)."""
+
+    groups: dict[Group, SweepGroup] = named("")
+    """All clips and each camera family."""
+    drag: dict[PathKey, Number] = named("drag")
+    """The drag rule's accuracy on the clips, by path."""
+    size_error: Number | None = None
+    """Median relative error of one frame's blob diameter against the object's true apparent size."""
+    render_cpu_s: Number | None = None
+    """CPU seconds the clips took to render, as recorded when they were made (None: not recorded)."""
+
+
 @dataclass(frozen=True)
 class Numbers(Reported):
     """Every number and verdict the chapter *Real-world test* reports."""
@@ -54,3 +101,11 @@ class Numbers(Reported):
     """The paper's Figure 6: frames of the real videos, tracked."""
     models: dict[ModelKey, Classified] = named("")
     """Each model's labels: ``realworld.table1.rendered.light`` and so on."""
+    user: dict[ModelKey, dict[Class, Number]] = named("user", default_factory=dict)
+    """Each model's labels of the rendered videos on a user's path (no camera: ``study classify VIDEO`` with the
+    object's colour, shape and size): ``realworld.user.table1.light`` and so on."""
+    exact: dict[ModelKey, dict[Class, Number]] = named("exact", default_factory=dict)
+    """Each model's labels of the rendered videos from their exact heights (the renderer's truth: no tracker, no
+    camera): ``realworld.exact.table1.light`` and so on."""
+    sweep: Sweep | None = None
+    """The camera sweep (None: not run)."""

@@ -9,6 +9,8 @@ sizes the cue, decision and real-world chapters use.
 
 from __future__ import annotations
 
+from typing import Any
+
 import dataclasses
 from dataclasses import dataclass
 
@@ -82,6 +84,11 @@ class Preset:
     """Most real clips the real-world test classifies (None: all there are)."""
     render_shadows: bool = True
     """Draw shadows in the rendered videos (slower)."""
+    sweep_per_family: int = 20
+    """Clips per camera family in the real-world chapter's camera sweep (``study.methods.sweep``; four
+    families: 80 clips)."""
+    sweep_frame_scale: float = 1.0
+    """Factor on the camera sweep's frame sizes (below 1: smaller, faster frames, for tests)."""
 
     def base_config(self) -> TrainConfig:
         """The config every run starts from, before the grid values are set: the study's protocol, cut to
@@ -99,7 +106,12 @@ class Preset:
         return len(self.grid_lrs(cell)) * len(self.truncations) * len(self.dropouts) * len(self.batch_sizes)
 
 
-PRESETS: dict[str, Preset] = {name: Preset(name=name, **presets.sizes(name, "runs")) for name in presets.NAMES}
+SWEEP_SIZES: dict[str, dict[str, Any]] = {"smoke": {"sweep_per_family": 1, "sweep_frame_scale": 0.5}}
+"""The camera sweep's sizes where a preset differs from the paper's. Kept here, not with the other sizes in
+``study.core.presets``: that module is in the key of every data set and render, and the sweep is neither."""
+
+PRESETS: dict[str, Preset] = {name: Preset(name=name, **presets.sizes(name, "runs"), **SWEEP_SIZES.get(name, {}))
+                              for name in presets.NAMES}
 """Every preset's experiment sizes (their numbers are ``study.core.presets.SIZES``'s)."""
 
 

@@ -24,6 +24,7 @@ from study.see.config import COLORS, TrackConfig, parse_hsv
 from study.see.detect import detect_all
 from study.see.gaps import fill_gaps, resample, set_camera, set_scale
 from study.see.overlay import write_overlay
+from study.see.scale import DEFAULT, ObjectShape, read_scale
 from study.see.smooth import smooth
 from study.see.trackfile import read_csv, write_csv
 from study.see.trajectory import STATUS, Trajectory
@@ -43,6 +44,8 @@ def track_video(
     camera: Camera | None = None,
     depth: float | np.ndarray | None = None,
     rest_height: float = 0.0,
+    shape: ObjectShape | None = None,
+    scale_from: str = DEFAULT,
 ) -> Trajectory:
     """Track, fill short gaps, split at long ones, smooth between bounces if ``cfg.smooth`` asks, and turn pixels
     into heights: the whole pipeline for one video.
@@ -50,7 +53,9 @@ def track_video(
     With a ``camera`` (the one that filmed the video) and the object's ``depth`` along its view axis (metres; a
     number, or one per frame), heights come from the camera's geometry (``study.see.gaps.set_camera``: its tilt
     and the object's depth, no scale assumed), above ``rest_height``; else from one scale
-    (``study.see.gaps.set_scale``: ``metres_per_pixel``, or ``object_size`` over the blob's size at rest)."""
+    (``study.see.gaps.set_scale``): ``metres_per_pixel``; or read off the blob of an object of ``shape``
+    (``study.see.scale.read_scale``, at rest, as its mean over the video or by gravity, as ``scale_from`` says); or
+    ``object_size`` (a ball's diameter, metres) over the blob's size at rest."""
     cfg = cfg or TrackConfig()
     traj = fill_gaps(detect_all(path, cfg), cfg.max_gap)
     if cfg.smooth:
@@ -59,6 +64,8 @@ def track_video(
         if depth is None:
             raise TrajectoryError(f"{path}: a camera without the object's depth gives no height; pass depth")
         return set_camera(traj, camera, depth, rest_height)
+    if shape is not None and metres_per_pixel is None:
+        metres_per_pixel = read_scale(traj, shape, scale_from).metres_per_pixel
     return set_scale(traj, ground_v=ground_v, object_size=object_size, metres_per_pixel=metres_per_pixel)
 
 

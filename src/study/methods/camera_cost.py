@@ -1,0 +1,315 @@
+"""What a user's camera costs the answer: the sweep's clips (``study.methods.sweep``) tracked and turned into
+heights by each path a user without a calibrated camera has, classified, beside the same throws' exact heights.
+
+A path reads only the video and what a user knows (the object's colour, shape and size):
+
+- ``rest size``: one scale, the object's size over its blob's diameter at rest (``study.see.gaps.set_scale``:
+  today's ``study classify VIDEO --object-size``), the ground at the lowest centre position;
+- ``mean silhouette``: one scale, the object's mean-silhouette size (``study.see.size.apparent_size``) over the
+  blob's root-mean-square diameter over every measured frame (a tumbling box shows every side on average);
+- ``gravity``: one scale, g over the free flights' image curvature (``study.see.scale.gravity_scale``), the ground
+  at the lowest centre position;
+- ``geometry``: the camera's tilt, height and focal length fitted with gravity as the ruler
+  (``study.see.geometry.recover``).
+
+The exact path classifies the renderer's true heights: the camera's cost is the exact path's accuracy minus a
+user path's, on the same clips and seeds (a paired bootstrap). A clip a path cannot turn into heights (the object
+lost, no free flight) gets no answer and counts as a miss; :class:`PathResult` says how many.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from study.core.errors import StudyError
+from study.core.progress import Progress
+from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
+from study.methods import sweep
+from study.methods.sweep import Clip
+from study.methods.videos import Video
+from study.see import geometry, render, track
+from study.see.gaps import set_scale
+from study.see.scale import ObjectShape, read_scale
+from study.see.trajectory import Trajectory
+from study.simulate import measure as motion
+
+PATHS = ("rest size", "mean silhouette", "gravity", "geometry")
+"""The user's paths from pixels to metres, in the order the tables show them."""
+
+
+def shape_of(cfg) -> ObjectShape:
+    """The :class:`~study.see.scale.ObjectShape` of a ``synth.SynthConfig``'s object (its ``shape`` holds
+    half-sizes)."""
+    full = tuple(2 * float(s) for s in cfg.shape.size)
+    n = {"box": 3, "sphere": 1}.get(cfg.shape.kind, 2)
+    return ObjectShape(cfg.shape.kind, full[:n])
+
+
+def _one_scale(how: str) -> Callable[[Trajectory, ObjectShape], Trajectory]:
+    def scaled(traj: Trajectory, shape: ObjectShape) -> Trajectory:
+        return set_scale(traj, metres_per_pixel=read_scale(traj, shape, how).metres_per_pixel)
+
+    return scaled
+
+
+def _geometry(traj: Trajectory, shape: ObjectShape) -> Trajectory:
+    z, _ = geometry.recover(traj.t, traj.u, traj.v, traj.diameter, traj.width, traj.height_px, shape.mean_size(),
+                            0.0, source=traj.source)
+    return replace(traj, z=z, ground_z=0.0, units="m")
+
+
+SCALE: dict[str, Callable[[Trajectory, ObjectShape], Trajectory]] = {
+    "rest size": _one_scale("rest"), "mean silhouette": _one_scale("mean"), "gravity": _one_scale("gravity"),
+    "geometry": _geometry}
+"""Each path: a pixel trajectory and the object's shape -> the trajectory with heights in metres."""
+
+
+@dataclass(frozen=True)
+class Heights:
+    """One clip's centre heights above its rest height, metres, frame by frame (NaN where a path has none)."""
+
+    exact: np.ndarray
+    """(n,) the renderer's truth."""
+    paths: dict[str, np.ndarray | str]
+    """Path name -> (n,) its heights, or why it has none."""
+    tracks: dict[str, Trajectory]
+    """Path name -> the trajectory its heights came from (what the model reads)."""
+
+
+def heights(clip: Clip, shape: ObjectShape) -> Heights:
+    """Track ``clip`` once (pixels) and turn it into heights by every path of :data:`PATHS`, for an object of
+    ``shape``."""
+    return video_heights(clip.video, shape)
+
+
+def video_heights(v: Video, shape: ObjectShape) -> Heights:
+    """:func:`heights` of any rendered video (one with ground truth)."""
+    truth = render.read_truth(v.truth)
+    rest = v.rest_height
+    exact = truth["z"] - rest
+    paths: dict[str, np.ndarray | str] = {}
+    tracks: dict[str, Trajectory] = {}
+    try:
+        px = track.track_video(v.path, track.TrackConfig(color=v.color, progress=False))
+    except StudyError as e:
+        return Heights(exact, dict.fromkeys(PATHS, str(e)), {})
+    for name in PATHS:
+        try:
+            t = SCALE[name](px, shape)
+        except StudyError as e:
+            paths[name] = str(e)
+            continue
+        tracks[name] = t
+        h = np.where(t.status > 0, t.height, np.nan)
+        paths[name] = h[: len(exact)] if len(h) >= len(exact) else np.pad(h, (0, len(exact) - len(h)),
+                                                                           constant_values=np.nan)
+    return Heights(exact, paths, tracks)
+
+
+def truth_trajectory(video: Video, fps: float | None = None) -> Trajectory:
+    """A rendered video's true centre as a trajectory in metres (every frame measured, its heights exact): what a
+    perfect tracker and camera would give. ``fps``: the video's frame rate (None: from the truth's times)."""
+    truth = render.read_truth(video.truth)
+    n = len(truth["t"])
+    rate = fps if fps is not None else float(1 / np.median(np.diff(truth["t"])))
+    return Trajectory(t=truth["t"], u=truth["u"], v=truth["v"], status=np.ones(n, np.int8),
+                      segment=np.zeros(n, np.int32), confidence=np.ones(n), diameter=np.full(n, np.nan),
+                      fps=rate, source=video.truth, units="m", z=truth["z"], ground_z=video.rest_height)
+
+
+def exact_input(clip: Clip, fps: float, n_frames: int) -> np.ndarray:
+    """(n_frames, 3) float32: the clip's true centre heights as the model reads them (z only), resampled to
+    ``fps``, metres."""
+    traj = truth_trajectory(clip.video, clip.shot.fps)
+    return track.to_model_input(traj, fps, n_frames, rest_height=clip.video.rest_height)
+
+
+def line_rms(v: np.ndarray, z: np.ndarray) -> float:
+    """Root-mean-square error, in ``z``'s units, of the best line ``z ~ a v + b`` (least squares over the frames where
+    both are finite): the least error of one scale ``a`` and one ground row."""
+    m = np.isfinite(v) & np.isfinite(z)
+    line = np.stack([v[m], np.ones(int(m.sum()))], axis=1)
+    fit = np.linalg.lstsq(line, z[m], rcond=None)[0]
+    return float(np.sqrt(np.mean((line @ fit - z[m]) ** 2)))
+
+
+def one_scale_floor(clip: Clip) -> float:
+    """The least height error, metres RMS, any one-scale path can reach on ``clip``: its true heights against the
+    best line through its true image rows (one scale and one ground row, fitted with hindsight). What is left is the
+    camera's mixing of height with distance: an object that slides or bounces towards a camera above the floor
+    moves down the picture as if it fell, and one scale cannot undo that."""
+    truth = render.read_truth(clip.video.truth)
+    return line_rms(truth["v"], truth["z"] - clip.video.rest_height)
+
+
+@dataclass(frozen=True)
+class Floor:
+    """Where a one-scale path's height error comes from, on a group of clips (metres RMS, pooled over clips)."""
+
+    true_rows: float
+    """:func:`one_scale_floor`: the camera's own limit, with the true image rows."""
+    tracked_rows: float
+    """The same with the tracker's rows: the limit plus what the tracker adds."""
+    clips: int
+    """Clips tracked."""
+
+
+def floors(clips: Sequence[Clip], tracked: Sequence[Heights]) -> dict[str, Floor]:
+    """:class:`Floor` for every clip tracked ('all' and each family, as :func:`measure`), from each clip's
+    :func:`heights` (``tracked``, in the order of ``clips``: the tracking :func:`measure` already did)."""
+    rows: dict[str, list[tuple[float, float]]] = {"all": []}
+    for clip, h in zip(clips, tracked, strict=True):
+        if not h.tracks:
+            continue
+        t = next(iter(h.tracks.values()))
+        n = min(len(t.v), len(h.exact))
+        pair = (one_scale_floor(clip), line_rms(np.where(t.status[:n] > 0, t.v[:n], np.nan), h.exact[:n]))
+        rows["all"].append(pair)
+        rows.setdefault(clip.shot.family, []).append(pair)
+    return {g: Floor(*np.sqrt(np.mean(np.square(r), axis=0)).tolist(), len(r)) for g, r in rows.items()}
+
+
+def height_errors(tracked: Sequence[Heights]) -> dict[str, tuple[float, float]]:
+    """Each path's height error over ``tracked`` videos: path -> (root-mean-square over every frame with a height,
+    the same after removing each video's median error), millimetres (NaN for a path with no heights)."""
+    out = {}
+    for k in PATHS:
+        e = [(h.paths[k] - h.exact)[np.isfinite(h.paths[k])] for h in tracked if not isinstance(h.paths[k], str)]
+        e = [x for x in e if len(x)]
+        if not e:
+            out[k] = (math.nan, math.nan)
+            continue
+        raw, centred = np.concatenate(e), np.concatenate([x - np.median(x) for x in e])
+        out[k] = (1000 * float(np.sqrt(np.mean(raw**2))), 1000 * float(np.sqrt(np.mean(centred**2))))
+    return out
+
+
+@dataclass(frozen=True)
+class PathResult:
+    """One path on a group of clips."""
+
+    accuracy: Interval
+    """Accuracy over the clips and the model's seeds (a clip without heights is a miss)."""
+    cost: Interval | None
+    """The exact path's accuracy minus this one's, paired over clips and seeds (None for the exact path)."""
+    rms_mm: float
+    """Root-mean-square height error over every frame with a height, millimetres."""
+    rms_centred_mm: float
+    """The same after removing each clip's median error (what one offset cannot fix), millimetres."""
+    no_heights: int
+    """Clips the path could not turn into heights."""
+
+
+def track_clips(clips: Sequence[Clip], shape: ObjectShape, progress: bool = True) -> list[Heights]:
+    """:func:`heights` of every clip, in order: each clip tracked once, for every model and rule to read."""
+    out = []
+    with Progress("track the camera sweep", total=len(clips), show=progress, unit="clip") as bar:
+        for clip in clips:
+            out.append(heights(clip, shape))
+            bar.update()
+    return out
+
+
+def inputs(clips: Sequence[Clip], tracked: Sequence[Heights], fps: float, n_frames: int
+           ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """What a model reads of every clip by every path: (path -> (n_clips, n_frames, 3) float32 metres, path ->
+    (n_clips,) bool, the clips the path has no heights for, whose rows are zeros)."""
+    names = ("exact", *PATHS)
+    x = {k: np.zeros((len(clips), n_frames, 3), np.float32) for k in names}
+    missing = {k: np.zeros(len(clips), bool) for k in names}
+    for i, (clip, h) in enumerate(zip(clips, tracked, strict=True)):
+        x["exact"][i] = exact_input(clip, fps, n_frames)
+        for k in PATHS:
+            if isinstance(h.paths[k], str):
+                missing[k][i] = True
+                continue
+            try:
+                x[k][i] = track.to_model_input(h.tracks[k], fps, n_frames, rest_height=clip.video.rest_height)
+            except StudyError:
+                missing[k][i] = True
+    return x, missing
+
+
+@dataclass(frozen=True)
+class Measured:
+    """One model (the seeds of one configuration) on the sweep, by every path."""
+
+    results: dict[str, dict[str, PathResult]]
+    """Group ('all' and each family) -> path ('exact' and :data:`PATHS`) -> :class:`PathResult`."""
+    correct: dict[str, np.ndarray]
+    """Path -> (seeds, clips) bool: which seed labelled which clip right."""
+    families: tuple[str, ...]
+    """Each clip's camera family, in order."""
+
+    def difference(self, a: str, b: str, group: str = "all") -> Interval:
+        """Path ``a``'s accuracy minus path ``b``'s on ``group``'s clips, paired over clips and seeds."""
+        sel = np.array([group in ("all", f) for f in self.families])
+        return bootstrap_difference(self.correct[a][:, sel], self.correct[b][:, sel])
+
+
+def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]) -> Measured:
+    """Every path on ``clips`` (their :func:`track_clips`, ``tracked``) classified by each of ``members`` (trained
+    'z' models: the seeds of one configuration, each with ``predict_proba``, ``fps`` and ``n_frames``)."""
+    first = members[0]
+    x, missing = inputs(clips, tracked, first.fps, first.n_frames)
+    y = np.array([c.video.label == "heavy" for c in clips])
+    correct = {k: np.stack([(np.asarray(m.predict_proba(xk))[:, 1] > 0.5) == y for m in members]) & ~missing[k]
+               for k, xk in x.items()}
+    errors: dict[str, list[np.ndarray]] = {"exact": [np.zeros(1)] * len(clips)}
+    for k in PATHS:
+        errors[k] = [np.array([]) if isinstance(h.paths[k], str) else (h.paths[k] - h.exact)[np.isfinite(h.paths[k])]
+                     for h in tracked]
+    fams = tuple(c.shot.family for c in clips)
+    out: dict[str, dict[str, PathResult]] = {}
+    for g in ("all", *dict.fromkeys(fams)):
+        sel = np.array([g in ("all", f) for f in fams])
+        out[g] = {}
+        for k in x:
+            e = [errors[k][i] for i in np.flatnonzero(sel) if len(errors[k][i])]
+            pooled = np.concatenate(e) if e else np.array([np.nan])
+            centred = np.concatenate([v - np.median(v) for v in e]) if e else np.array([np.nan])
+            out[g][k] = PathResult(
+                bootstrap_accuracy(correct[k][:, sel]),
+                None if k == "exact" else bootstrap_difference(correct["exact"][:, sel], correct[k][:, sel]),
+                1000 * float(np.sqrt(np.mean(pooled**2))), 1000 * float(np.sqrt(np.mean(centred**2))),
+                int(missing[k][sel].sum()))
+    return Measured(out, correct, fams)
+
+
+def drag_rule(f_train: np.ndarray, y_train: np.ndarray, clips: Sequence[Clip], tracked: Sequence[Heights],
+              fps: float, n_frames: int, contact_height: float) -> dict[str, Interval]:
+    """The drag rule (one threshold on the first fall's vertical acceleration, ``study.simulate.measure``), its
+    threshold chosen on the training throws' exact accelerations ``f_train`` (n,) m/s^2 with labels ``y_train``
+    (n,), scored on the sweep's clips read by each path (and exactly): path -> accuracy over the clips. A clip
+    without heights gets the training median's label."""
+    x, _ = inputs(clips, tracked, fps, n_frames)
+    y = np.array([c.video.label == "heavy" for c in clips], int)
+    out = {}
+    for k, xk in x.items():
+        f = motion.fall_acceleration(xk[..., 2], fps, contact_height)
+        out[k] = bootstrap_accuracy(motion.best_threshold_rule(f_train, y_train, f, y)["correct"])
+    return out
+
+
+def size_error(clips: Sequence[Clip], tracked: Sequence[Heights], shape: ObjectShape) -> float:
+    """Median over the clips of each clip's median relative error of the blob's diameter, frame by frame, against
+    the disc of the object's mean silhouette at its true depth (``study.see.size``): how far one frame's apparent
+    size says where the object is."""
+    errs = []
+    for clip, h in zip(clips, tracked, strict=True):
+        if not h.tracks:
+            continue
+        t = next(iter(h.tracks.values()))
+        truth = render.read_truth(clip.video.truth)
+        points = np.stack([truth["x"], truth["y"], truth["z"]], axis=1)
+        cam = sweep.camera(clip.shot, points)
+        true_px = cam.focal * shape.mean_size() / cam.depth_of(points)
+        n = min(len(true_px), len(t.diameter))
+        rel = np.abs(np.where(t.status[:n] > 0, t.diameter[:n], np.nan) / true_px[:n] - 1)
+        if np.isfinite(rel).any():
+            errs.append(float(np.nanmedian(rel)))
+    return float(np.median(errs)) if errs else math.nan
