@@ -141,6 +141,21 @@ def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, s
         line, note = capsys.readouterr().out.strip().splitlines()[-2:]
         assert line.startswith(f"{source}: ") and ("light (p = " in line or "heavy (p = " in line), line
         assert note.startswith("  assumed: ") and "mm/px" in note and "frames found" in note, note
+    # a track in pixels (no --object-size) is classified with the object's size given then, as the video is
+    assert cli.main(["track", str(small_video), "--color", "orange", "--out", str(tmp_path / "px.csv"),
+                     "--no-progress"]) == 0
+    capsys.readouterr()
+    flags = ["--model", str(out), "--object-size", "0.2", "--object-shape", "box", "--no-progress"]
+    labels = []
+    for source in (tmp_path / "px.csv", small_video):
+        assert cli.main(["classify", str(source), "--color", "orange", *flags]) == 0
+        line, note = capsys.readouterr().out.strip().splitlines()[-2:]
+        labels.append(line.split(": ")[1].split(" (")[0])
+        assert "RMS over" in note, note
+    assert labels[0] == labels[1], "the pixel CSV and its video get the same answer"
+    assert cli.main(["classify", str(tmp_path / "px.csv"), "--model", str(out), "--no-progress"]) == 0
+    note = capsys.readouterr().out.strip().splitlines()[-1]
+    assert "0.067 m over a" in note, "without --object-size, the object is a tennis ball, as for a video"
     # the user's path reads the video and the flags only: no render truth, no manifest, no camera beside it
     alone = tmp_path / "alone" / "clip.mp4"
     alone.parent.mkdir()

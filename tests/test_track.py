@@ -132,6 +132,13 @@ def test_csv_round_trip_and_overlay(rendered, tmp_path):
     back = track.read_csv(out)
     np.testing.assert_allclose(back.height, traj.height, atol=1e-4, equal_nan=True)
     assert back.units == "m" and (back.status == traj.status).all() and back.fps == pytest.approx(30.0)
+    np.testing.assert_allclose(back.diameter, traj.diameter, atol=1e-3, equal_nan=True)  # a pixel track can be scaled
+    assert np.isfinite(back.diameter).sum() > 10
+    old = tmp_path / "old.csv"  # a file from before the diameter was kept: its first eight columns
+    old.write_text("\n".join(",".join(line.split(",")[:8]) for line in out.read_text().splitlines()) + "\n")
+    before = track.read_csv(old)
+    assert np.isnan(before.diameter).all() and np.allclose(before.height, back.height, equal_nan=True)
+    old.unlink()
     ov = track.write_overlay(traj, tmp_path / "ov.mp4")
     assert video.probe(ov).width == 320 and video.probe(ov).frames == len(traj.t)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ov.mp4", "t.csv"]  # no temporary files left
@@ -239,8 +246,12 @@ def test_cli_classify_video_and_csv(rendered, tmp_path, z_model, capsys):
     assert rc == 0 and out[0] == f"{rendered.video}: {('light', 'heavy')[k]} (p = {p[k]:.3f}; model {folder})"
     assert len(out) == 2 and out[1].startswith("  assumed: scale ") and "RMS over" in out[1], "what it assumed"
     track.write_csv(track.track_video(rendered.video, FAST), tmp_path / "px.csv")
-    rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv")])
-    assert rc == 2 and "pixels" in capsys.readouterr().err  # a pixel CSV needs a scale
+    rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv")])  # scaled as a video would be:
+    assert rc == 0 and "0.067 m over a" in capsys.readouterr().out  # by the object's size (a tennis ball's, unless told)
+    old = tmp_path / "old.csv"  # a pixel track from before the blob's size was kept: nothing to scale it by
+    old.write_text("\n".join(",".join(r.split(",")[:8]) for r in (tmp_path / "px.csv").read_text().splitlines()))
+    rc = cli.main(["classify", "--model", str(folder), str(old)])
+    assert rc == 2 and "--metres-per-pixel" in capsys.readouterr().err
     rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv"), "--metres-per-pixel", "0.01"])
     assert rc == 0 and "(p = " in capsys.readouterr().out
 

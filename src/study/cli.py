@@ -384,12 +384,20 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
             traj = track.read_csv(a.input)
             if a.metres_per_pixel is not None:
                 traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=a.metres_per_pixel)
+                scale = f"scale {a.metres_per_pixel * 1000:.2f} mm/px as given"
+            elif traj.units != "m" and shape is not None:  # `study track` without --object-size wrote pixels
+                from study.see.scale import read_scale
+
+                read = read_scale(traj, shape, a.scale_from)
+                traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=read.metres_per_pixel)
+                scale = read.note()
             elif traj.units != "m":
                 raise ConfigError(
-                    f"trajectory CSV {a.input}: heights are in pixels; give --metres-per-pixel, or re-track "
-                    "the video with --object-size, so the model sees metres"
+                    f"trajectory CSV {a.input}: heights are in pixels; give the object's size (--object-size D, "
+                    "metres) or --metres-per-pixel, so the model sees metres"
                 )
-            scale = f"heights as the CSV holds them ({traj.height_per_pixel * 1000:.2f} mm/px)"
+            else:
+                scale = f"heights as the CSV holds them ({traj.height_per_pixel * 1000:.2f} mm/px)"
         else:
             from study.see.scale import read_scale
 

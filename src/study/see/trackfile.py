@@ -13,18 +13,21 @@ from study.core.cache import write_text_atomic
 from study.core.errors import TrajectoryError, check_file
 from study.see.trajectory import STATUS, Trajectory
 
-COLUMNS = ("frame", "t_s", "u_px", "v_px", "height", "status", "segment", "confidence")
-"""The file's columns; the height's header names its units (``height_m`` or ``height_px``)."""
+COLUMNS = ("frame", "t_s", "u_px", "v_px", "height", "status", "segment", "confidence", "diameter_px")
+"""The file's columns; the height's header names its units (``height_m`` or ``height_px``). The blob's diameter
+lets a track in pixels be scaled later (``study classify TRACK.csv --object-size D``); files written before it
+was kept have the first eight columns and are read without it."""
 
 
 def write_csv(traj: Trajectory, path: str | Path) -> Path:
-    """Write one row per frame: frame, t_s, u_px, v_px, height_<units>, status, segment, confidence (atomically)."""
+    """Write one row per frame: frame, t_s, u_px, v_px, height_<units>, status, segment, confidence, diameter_px
+    (atomically)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow([*COLUMNS[:4], f"height_{traj.units}", *COLUMNS[5:]])
     for i, h in enumerate(traj.height):
         w.writerow([i, f"{traj.t[i]:.9f}", f"{traj.u[i]:.3f}", f"{traj.v[i]:.3f}", f"{h:.6g}", STATUS[traj.status[i]],
-                    int(traj.segment[i]), f"{traj.confidence[i]:.3f}"])
+                    int(traj.segment[i]), f"{traj.confidence[i]:.3f}", f"{traj.diameter[i]:.3f}"])
     write_text_atomic(path, buf.getvalue())
     return Path(path)
 
@@ -38,7 +41,7 @@ def read_csv(path: str | Path) -> Trajectory:
     except (OSError, UnicodeDecodeError, csv.Error) as e:
         raise TrajectoryError(f"trajectory CSV {p}: cannot be read ({type(e).__name__}: {e})") from None
     head = rows[0] if rows else []
-    if len(head) != len(COLUMNS) or head[0] != "frame" or not head[4].startswith("height_"):
+    if len(head) not in (len(COLUMNS) - 1, len(COLUMNS)) or head[0] != "frame" or not head[4].startswith("height_"):
         raise TrajectoryError(f"trajectory CSV {p}: the header is not that of 'study track --out'")
     units = head[4][len("height_"):]
     body = [r for r in rows[1:] if r]
@@ -47,6 +50,7 @@ def read_csv(path: str | Path) -> Trajectory:
         status = np.array([STATUS.index(r[5]) for r in body], np.int8)
         seg = np.array([int(r[6]) for r in body], np.int32)
         conf = np.array([float(r[7]) for r in body])
+        diam = np.array([float(r[8]) for r in body]) if len(head) == len(COLUMNS) else np.full(len(body), np.nan)
     except (ValueError, IndexError) as e:
         raise TrajectoryError(f"trajectory CSV {p}: a row is malformed ({e})") from None
     if len(t) < 2:
@@ -59,7 +63,7 @@ def read_csv(path: str | Path) -> Trajectory:
     else:
         per_pixel, ground = 1.0, float(np.nanmax(v)) if ok.any() else math.nan
     return Trajectory(t=t, u=u, v=v, status=status, segment=seg, confidence=conf,
-                      diameter=np.full(len(t), np.nan), fps=fps, source=p, ground_v=ground, height_per_pixel=per_pixel, units=units)
+                      diameter=diam, fps=fps, source=p, ground_v=ground, height_per_pixel=per_pixel, units=units)
 
 
 def _fit_height(v: np.ndarray, h: np.ndarray) -> tuple[float, float]:
