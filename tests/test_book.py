@@ -286,9 +286,14 @@ def test_other_preset_reexecutes_everything(tiny: Path) -> None:
     assert ran(book.execute(tiny, "paper")) == set()
 
 
-def test_only_reexecutes_named_chapter_and_any_missing_one(tiny: Path) -> None:
+def test_only_executes_the_named_chapter_and_says_so_on_a_chapter_never_executed(tiny: Path) -> None:
     executed(tiny, "alpha").unlink()
-    assert ran(book.execute(tiny, "paper", only=["beta"])) == {"alpha", "beta"}
+    timings = book.execute(tiny, "paper", only=["beta"])
+    assert ran(timings) == {"beta"} and timings["alpha"].get("absent")
+    page = nbformat.read(executed(tiny, "alpha"), as_version=4)
+    assert [c.cell_type for c in page.cells] == ["markdown"] and "Not executed in this build" in page.cells[0].source
+    assert page.cells[0].source.startswith("# "), "the page keeps its title for the table of contents"
+    assert ran(book.execute(tiny, "paper")) == {"alpha"}, "the next full build executes it"
 
 
 def test_only_unknown_chapter_is_a_config_error(tiny: Path) -> None:

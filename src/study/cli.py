@@ -115,8 +115,8 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
         action="append",
         default=None,
         help="re-execute this chapter (by file stem, e.g. 'data'), even if cached; repeatable. The other "
-        "chapters keep their executed copies, even out-of-date ones, except that a chapter with no "
-        "copy at all is executed; the whole book is still built",
+        "chapters keep their executed copies, even out-of-date ones; one never executed gets a page saying "
+        "so (unless the chapter named is the summary, which reads them all); the whole book is still built",
     )
     p.add_argument(
         "--root",

@@ -403,8 +403,11 @@ def _stored(ch: Chapter) -> dict[str, Any] | None:
 # The whole build
 
 
-def _decide(ch: Chapter, current: str, force: bool, only: list[str] | None) -> tuple[str, dict[str, Any]]:
-    """``("cached" | "kept" | "execute", stored key record)`` for one chapter."""
+def _decide(ch: Chapter, current: str, force: bool, only: list[str] | None,
+            reads_all: bool = False) -> tuple[str, dict[str, Any]]:
+    """``("cached" | "kept" | "absent" | "execute", stored key record)`` for one chapter. With ``only``, a
+    chapter not named is kept as it is (out of date or, never executed, ``"absent"``), unless a chapter named
+    reads every chapter's results (``reads_all``): then one never executed is executed."""
     stored = _stored(ch) or {}
     if force or (only is not None and ch.stem in only):
         return "execute", stored
@@ -412,7 +415,23 @@ def _decide(ch: Chapter, current: str, force: bool, only: list[str] | None) -> t
         return "cached", stored
     if only is not None and ch.executed.is_file():
         return "kept", stored  # out of date, but the user asked for other chapters only
+    if only is not None and not reads_all:
+        return "absent", stored
     return "execute", stored
+
+
+def _placeholder(ch: Chapter, only: list[str]) -> None:
+    """An executed copy of ``ch`` that says it was not executed (``--only`` named other chapters), so the book
+    still builds; it has no key, so the next build without ``--only`` executes the chapter."""
+    import nbformat
+
+    title = next((line for line in ch.source.read_text().splitlines() if line.startswith("# ")), f"# {ch.stem}")
+    text = (f"{title}\n\n*Not executed in this build*: `study book --only {' '.join(only)}` asked for other "
+            f"chapters. Run `study book --only {ch.stem}`, or `study book`, to execute it.")
+    ch.key_file.unlink(missing_ok=True)  # an older execution's key must not vouch for this page
+    ch.executed.parent.mkdir(parents=True, exist_ok=True)
+    page = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell(text)])
+    write_text_atomic(ch.executed, nbformat.writes(page))
 
 
 def execute(root: Path, preset: str, force: bool = False, only: list[str] | None = None,
@@ -420,8 +439,9 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
             data_dir: Path | None = None) -> dict[str, dict[str, Any]]:
     """Execute (or reuse) every chapter of ``root``'s book; returns {stem: {"seconds", "cached", ...}}.
 
-    ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, keeping the others'
-    current copies, but a chapter that has no executed copy at all is always executed.
+    ``force`` re-executes every chapter; ``only`` (stems) re-executes just those, keeping the others' current
+    copies; a chapter never executed gets a page saying so (:func:`_placeholder`), unless a chapter named reads
+    every chapter's results (the summary), which executes it.
 
     **One plan for the build.** The chapters to execute run two at a time (:data:`AT_ONCE`). A chapter that asks
     for runs not trained yet writes them down and stops (``study.runs.schedule.ask``); its runs go at once to one
@@ -476,7 +496,12 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                     **({"device": device} if device != "cpu" else {}),
                 }
                 current = key({**base, "inputs": inputs_fingerprint(root, parameters)}, length=64)
-                action, stored = _decide(ch, current, force, only)
+                action, stored = _decide(ch, current, force, only, reads_all=any(c.stem in (only or ()) for c in last))
+                if action == "absent":
+                    _placeholder(ch, only or [])
+                    timings[ch.stem] = {"seconds": 0.0, "cached": True, "absent": True}
+                    tqdm.write(f"{where}: not executed (never executed before; not in --only)", file=sys.stderr)
+                    continue
                 if action != "execute":
                     seconds = stored.get("seconds", 0.0)
                     timings[ch.stem] = {"seconds": seconds, "cached": True, **({"stale": True} if action == "kept" else {})}
