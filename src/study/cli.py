@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from study.core import presets
-from study.core.errors import StudyError, check_writable, removed_on_error
+from study.core.errors import ConfigError, StudyError, check_writable, removed_on_error
 from study.core.fielddoc import field_docs
 
 
@@ -69,6 +69,13 @@ def _add_synth(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--data-dir", type=Path, default=None,
                    help="cache folder (default: $STUDY_DATA_DIR, else data/ here)")
     p.add_argument("--threads", type=int, default=None, help="simulation threads (default: all cores)")
+    p.add_argument("--train-per-class", type=int, default=None, metavar="N",
+                   help="training throws per class (default: the preset's)")
+    p.add_argument("--test-per-class", type=int, default=None, metavar="N",
+                   help="test throws per class (default: the preset's)")
+    p.add_argument("--priors", type=Path, default=None, metavar="FILE",
+                   help="a TOML or JSON file of the classes' (and the launch's) ranges, put over the preset's: "
+                   "sections [light], [heavy], [launch], e.g. 'mass = [0.05, 0.3]' (see study.simulate.priors)")
     from study.simulate.synth import SynthConfig
 
     _add_fields(p, SynthConfig, ["engine"])
@@ -78,6 +85,16 @@ def _add_synth(sub: argparse._SubParsersAction) -> None:
         from study.simulate import synth
 
         cfg = synth.SynthConfig.preset(a.preset)
+        if a.priors is not None:
+            from study.simulate.priors import read_priors
+
+            cfg = read_priors(a.priors, cfg)
+        for flag, n in (("--train-per-class", a.train_per_class), ("--test-per-class", a.test_per_class)):
+            if n is not None and n < 1:
+                raise ConfigError(f"{flag} {n}: give at least 1 throw per class")
+        sizes = {k: v for k, v in (("n_train", a.train_per_class), ("n_test", a.test_per_class)) if v is not None}
+        if sizes:
+            cfg = cfg.replace(**sizes)
         if a.engine != cfg.engine:  # Bullet has no air: its data set is the air-off one of the same throws
             cfg = cfg.replace(engine=a.engine, air=cfg.air and a.engine == "mujoco")
         with removed_on_error(a.out):
