@@ -281,6 +281,13 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     clear = _result(n, "velocity, randomised", _sweep(best_path_gain=0.5, drag_rest=_iv(0.9)))
     assert "interval clear of 0" in clear.default_words and "should default to it" in clear.default_words
     assert "survives every path" in clear.drag_words
+    assert r.real_count_words == "0 clips"
+    limited = dataclasses.replace(r, real=(None, None), real_found=6)
+    assert limited.real_count_words == "the first 2 of the folder's 6 clips (this preset keeps 2)"
+    mine = realworld.reported(_rec(), {"table1": ("your model", RENDERED, REAL)}, objects="orange balls")
+    assert "orange balls filmed by others" in mine.models["table1"].real["light"].decision.reason
+    assert "(orange balls, n = 2)" in realworld._acc_table({"your model": (mine.models["table1"], REAL)}, 2,
+                                                            "orange balls").markdown()
     t = realworld._render_heights_table({k: (30.0, 20.0) for k in camera_cost.PATHS}, cs).rows
     assert [r["path"] for r in t if "(default)" in r["path"]] == ["mean silhouette (default)"]
     assert t[0]["book"] == "20 (30)" and t[0]["sweep"] == "100 (150)"

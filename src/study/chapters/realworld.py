@@ -285,9 +285,12 @@ def scale_error(tracks: Iterable[Tracked], true: float) -> float:
 
 WHY_NOT_COMPARABLE: dict[str, str] = {
     "rendered": "rendered MuJoCo throws from the study's priors, not the paper's filmed golf ball and wooden cube",
-    "real": "tennis balls filmed by others, classified by a model trained on 20 cm boxes, not the paper's golf ball",
+    "real": "{objects} filmed by others, classified by a model trained on 20 cm boxes, not the paper's golf ball",
 }
-"""Why neither of our video sets can be compared with the paper's footage."""
+"""Why neither of our video sets can be compared with the paper's footage (``{objects}``: what the real clips show)."""
+REAL_OBJECTS = "tennis balls"
+"""What the real clips beside the project show, as the chapter's words name them (a reader's own: the chapter's
+``objects`` parameter)."""
 FACTORS = (0.5, 0.75, 1.0, 1.5, 2.0)
 """Factors the pixel scale is multiplied by (a wrong scale), to measure how much the labels depend on it."""
 FILM_FRAMES = 6
@@ -466,23 +469,23 @@ def _pct_ci(iv: Interval | None) -> str:
     return "—" if iv is None else pct_ci(iv)
 
 
-def _classified(name: str, rendered: Sequence[Label], real: Sequence[Label]) -> Classified:
+def _classified(name: str, rendered: Sequence[Label], real: Sequence[Label], objects: str = REAL_OBJECTS) -> Classified:
     def numbers(labels: Sequence[Label], where: str, what: str) -> dict[Class, Number]:
         return {c: number(iv, what.format(c=c), paper=paper.REAL_WORLD[c],
-                          decision=verdicts.not_comparable(WHY_NOT_COMPARABLE[where]))
+                          decision=verdicts.not_comparable(WHY_NOT_COMPARABLE[where].format(objects=objects)))
                 for c, iv in per_class_interval(labels).items() if iv is not None}  # type: ignore[misc]
 
     return Classified(numbers(rendered, "rendered", "rendered {c} videos classified correctly, " + name),
                       numbers(real, "real", "real clips ({c}) classified correctly, " + name))
 
 
-def _figures() -> dict[str, Verdict]:
+def _figures(objects: str = REAL_OBJECTS) -> dict[str, Verdict]:
     judged = {
         "figure1": ("frames of a light object bouncing and a heavy one landing: shown for rendered throws of both "
-                    "classes and for real tennis balls; no real heavy object, since no such footage is public",
+                    f"classes and for real {objects}; no real heavy object, since no such footage is public",
                     "the paper's Figure 1: frames of a light and a heavy object"),
         "figure5": ("tracked height series of real videos of both classes: shown for rendered throws of both classes "
-                    "and for real tennis balls (light only)",
+                    f"and for real {objects} (light only)",
                     "the paper's Figure 5: tracked heights of the real videos"),
         "figure6": ("real video frames with the object tracked: the whole track drawn on the last tracked frame of "
                     "each rendered and real video", "the paper's Figure 6: frames of the real videos, tracked"),
@@ -691,6 +694,18 @@ class RealWorld:
     """The drag rule on the sweep's heights, by path."""
     heights_table: Table
     """Each path's height error on the book's renders and on the camera sweep, pooled."""
+    real_objects: str = REAL_OBJECTS
+    """What the real clips show, as the chapter's words name them."""
+    real_found: int | None = None
+    """Real clips the folder held, before the preset's limit (None: not counted)."""
+
+    @property
+    def real_count_words(self) -> str:
+        """How many real clips were classified, and of how many, when a preset keeps only some."""
+        n = len(self.real)
+        if self.real_found is not None and self.real_found > n:
+            return f"the first {n} of the folder's {self.real_found} clips (this preset keeps {n})"
+        return f"{n} clip{'s' if n != 1 else ''}"
 
     # Sentences whose words depend on the numbers -------------------------------------------------
 
@@ -836,18 +851,21 @@ def table1_model(runner: Runner) -> Ensemble:
     return Ensemble(tuple(runner.trained(dataclasses.replace(cfg, seed=s)) for s in runner.preset.seeds))
 
 
-def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = None) -> RealWorld:
+def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = None, model_name: str = "",
+            objects: str = REAL_OBJECTS, real_found: int | None = None) -> RealWorld:
     """The chapter *Real-world test* on ``runner``'s preset: its rendered throws and the ``real`` clips
-    (:func:`real_clips`), classified by Table 1's Z model (its seeds as one classifier, :func:`table1_model`) or by
-    ``model`` if given, and by the model :func:`recommend` chooses. Every run is cached; the videos are rendered
-    and tracked once."""
+    (:func:`real_clips`; ``objects`` says what they show, ``real_found`` how many the folder held before a preset's
+    limit), classified by Table 1's Z model (its seeds as one classifier, :func:`table1_model`) or by ``model`` if
+    given (named ``model_name`` in the tables), and by the model :func:`recommend` chooses. Every run is cached;
+    the videos are rendered and tracked once."""
     tm = model if model is not None else table1_model(runner)
     rendered, rcfg = calibration.rendered(runner)
     real = list(real)
     pixel = tracking_error(rendered)
     tracks_r, tracks_q = track_all(rendered, progress=False), track_all(real, progress=False)
     rec = recommend(runner)
-    models: dict[ModelKey, tuple[str, Model]] = {"table1": ("Table 1's Z model", tm)}
+    models: dict[ModelKey, tuple[str, Model]] = {
+        "table1": (model_name or ("your model" if model is not None else "Table 1's Z model"), tm)}
     if rec.choice != "positions, exact" or model is not None:  # otherwise the recommended model is Table 1's
         models["recommended"] = (f"recommended ({rec.choice})", rec.model)
     labels = {key: (classify(m, rendered, tracks_r, progress=False), classify(m, real, tracks_q, progress=False))
@@ -859,7 +877,7 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
     tracks_x = truth_tracks(rendered)
     exact = {key: classify(m, rendered, tracks_x, progress=False) for key, (_, m) in models.items()}
     cs = camera_sweep(runner, rec)
-    numbers = reported(rec, {key: (models[key][0], *labels[key]) for key in models}, user, cs, exact)
+    numbers = reported(rec, {key: (models[key][0], *labels[key]) for key in models}, user, cs, exact, objects)
     classified = numbers.models
 
     light = next(v for v in rendered if v.label == "light")
@@ -876,7 +894,7 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
         tuple(track_view(v, tracks[v.path.name], title) for title, v, tracks in shown),
         tuple(heights(tm, "rendered", rendered, tracks_r) + heights(tm, "real", real, tracks_q)),
         _val_table(rec),
-        _acc_table({models[k][0]: (classified[k], labels[k][1]) for k in models}, n),
+        _acc_table({models[k][0]: (classified[k], labels[k][1]) for k in models}, n, objects),
         _real_table(labels["table1"][1]),
         _every_table(rec, rendered, real, tracks_r, tracks_q),
         scale_sweep(tm, rendered, real, tracks_r, tracks_q),
@@ -885,17 +903,18 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
         user_table=_user_table({models[k][0]: (exact[k], labels[k][0], user[k]) for k in models}), camera=cs,
         sweep_acc_table=_sweep_table(cs), sweep_heights_table=_heights_table(cs),
         sweep_models_table=_candidates_sweep_table(cs), drag_table=_drag_table(cs),
-        heights_table=_render_heights_table(render_heights, cs))
+        heights_table=_render_heights_table(render_heights, cs), real_objects=objects,
+        real_found=real_found if real_found is not None else len(real))
 
 
 def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Label], Sequence[Label]]],
              user: dict[ModelKey, Sequence[Label]] | None = None, cs: CameraSweep | None = None,
-             exact: dict[ModelKey, Sequence[Label]] | None = None) -> Numbers:
+             exact: dict[ModelKey, Sequence[Label]] | None = None, objects: str = REAL_OBJECTS) -> Numbers:
     """What the chapter reports: each candidate's validation accuracy (``rec``), the paper's figures judged,
     each model's accuracy per class from its ``labels`` (model key -> (its name, its labels of the rendered
     videos, of the real clips)), its labels of the rendered videos on a user's path (``user``), and the camera
     sweep (``cs``)."""
-    judged = _figures()
+    judged = _figures(objects)
     why = verdicts.not_comparable(WHY_NOT_COMPARABLE["rendered"])
 
     def per_class(got: dict[ModelKey, Sequence[Label]] | None, how: str) -> dict[ModelKey, dict[Class, Number]]:
@@ -905,7 +924,7 @@ def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Lab
                 for key, ls in (got or {}).items()}
 
     return Numbers(_candidates(rec), judged["figure1"], judged["figure5"], judged["figure6"],
-                   {key: _classified(name, rendered, real) for key, (name, rendered, real) in labels.items()},
+                   {key: _classified(name, rendered, real, objects) for key, (name, rendered, real) in labels.items()},
                    per_class(user, "on a user's path"), per_class(exact, "from their exact heights"),
                    None if cs is None else _sweep_numbers(cs))
 
@@ -929,7 +948,8 @@ def _val_table(rec: Recommendation) -> Table:
                         "chosen": "chosen"})
 
 
-def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered: int) -> Table:
+def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered: int,
+               objects: str = REAL_OBJECTS) -> Table:
     """Each model (by name: its numbers and its labels of the real clips), per class, beside the paper's."""
     rows = []
     for name, (numbers, real) in models.items():
@@ -940,7 +960,7 @@ def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered
                          "rendered": "—" if rendered is None else pct_ci(rendered.interval),
                          "verdict": "—" if rendered is None else rendered.verdict,
                          "real": "no footage" if on_real is None else
-                         f"{pct_ci(on_real.interval)} (tennis balls, n = {sum(r.label == c for r in real)})"})
+                         f"{pct_ci(on_real.interval)} ({objects}, n = {sum(r.label == c for r in real)})"})
     return Table(rows, {"model": "model", "class": "class", "paper": "paper",
                         "rendered": f"ours, rendered ({n_rendered} per class) [95 % Wilson]",
                         "verdict": "paper vs ours", "real": "ours, real [95 % Wilson]"})
