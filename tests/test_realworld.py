@@ -281,7 +281,7 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     clear = _result(n, "velocity, randomised", _sweep(best_path_gain=0.5, drag_rest=_iv(0.9)))
     assert "interval clear of 0" in clear.default_words and "should default to it" in clear.default_words
     assert "survives every path" in clear.drag_words
-    assert r.real_count_words == "0 clips"
+    assert r.real_count_words == "none were found here"
     limited = dataclasses.replace(r, real=(None, None), real_found=6)
     assert limited.real_count_words == "the first 2 of the folder's 6 clips (this preset keeps 2)"
     mine = realworld.reported(_rec(), {"table1": ("your model", RENDERED, REAL)}, objects="orange balls")

@@ -705,7 +705,7 @@ class RealWorld:
         n = len(self.real)
         if self.real_found is not None and self.real_found > n:
             return f"the first {n} of the folder's {self.real_found} clips (this preset keeps {n})"
-        return f"{n} clip{'s' if n != 1 else ''}"
+        return "none were found here" if n == 0 else f"{n} clip{'s' if n != 1 else ''}"
 
     # Sentences whose words depend on the numbers -------------------------------------------------
 
