@@ -282,6 +282,11 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     assert "interval clear of 0" in clear.default_words and "should default to it" in clear.default_words
     assert "survives every path" in clear.drag_words
     assert r.real_count_words == "none were found here"
+    from study.book import summary
+
+    said = summary.Findings._user_camera.fget(SimpleNamespace(sweep=n.sweep))  # the summary's sentence
+    assert said.startswith(" A camera nobody measured leaves less still: on 20 clips") and "(heights off by 100 mm" in said
+    assert summary.Findings._user_camera.fget(SimpleNamespace(sweep=None)) == ""
     limited = dataclasses.replace(r, real=(None, None), real_found=6)
     assert limited.real_count_words == "the first 2 of the folder's 6 clips (this preset keeps 2)"
     mine = realworld.reported(_rec(), {"table1": ("your model", RENDERED, REAL)}, objects="orange balls")

@@ -284,13 +284,13 @@ class Findings:
         """The camera sweep in one sentence ('' without it)."""
         if self.sweep is None:
             return ""
-        a, d = self.sweep.groups["all"].paths, self.sweep.drag  # type: ignore[index]
-        k = SCALE_DEFAULT
-        return (f" A camera nobody measured leaves less still: on {fmt_value(self.sweep.groups['all'].clips.value, 'count')} "  # type: ignore[index]
-                f"clips from random cameras, the recommended model scores {fmt(a['exact'].accuracy)} from the throws' "
-                f"exact heights and {fmt(a[k].accuracy)} from what a user's video gives (heights off by "
-                f"{fmt_value(a[k].heights_mm.value, 'mm') if a[k].heights_mm else '—'} RMS), and the drag rule falls "
-                f"from {fmt(d['exact'])} to {fmt(d[k])}.")
+        everything = self.sweep.groups["all"]  # type: ignore[index]
+        a, d, k = everything.paths, self.sweep.drag, SCALE_DEFAULT
+        off = fmt_value(a[k].heights_mm.value, "mm") if a[k].heights_mm else "—"
+        return (f" A camera nobody measured leaves less still: on {fmt_value(everything.clips.value, 'count')} clips "
+                f"from random cameras, the recommended model scores {fmt(a['exact'].accuracy)} from the throws' exact "
+                f"heights and {fmt(a[k].accuracy)} from what a user's video gives (heights off by {off} RMS), and the "
+                f"drag rule scores {fmt(d['exact'])} on exact heights and {fmt(d[k])} on a user's.")
 
 
 
