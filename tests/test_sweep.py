@@ -116,7 +116,7 @@ def test_the_drag_rule_on_the_sweep_reads_each_paths_first_fall(smoke):
     for c, heavy in zip(clips, split):
         c.video.label = "heavy" if heavy else "light"
     try:
-        acc = camera_cost.drag_rule(f_exact, split.astype(int), clips, tracked, fps, n, contact)
+        acc = camera_cost.drag_rule(f_exact, split.astype(int), clips, x, fps, contact)
     finally:
         for c, lab in zip(clips, y):
             c.video.label = "heavy" if lab else "light"

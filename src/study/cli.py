@@ -396,6 +396,8 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                 f"{which} was trained on {tm.dims!r}; one camera gives only the height: "
                 "use a model trained on 'z' (the paper's real-world test does)"
             )
+        from study.see.scale import read_scale
+
         shape = _object_shape(a)
         if a.input.suffix.lower() == ".csv":
             traj = track.read_csv(a.input)
@@ -403,8 +405,6 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                 traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=a.metres_per_pixel)
                 scale = f"scale {a.metres_per_pixel * 1000:.2f} mm/px as given"
             elif traj.units != "m" and shape is not None:  # `study track` without --object-size wrote pixels
-                from study.see.scale import read_scale
-
                 read = read_scale(traj, shape, a.scale_from)
                 traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=read.metres_per_pixel)
                 scale = read.note()
@@ -416,8 +416,6 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
             else:
                 scale = f"heights as the CSV holds them ({traj.height_per_pixel * 1000:.2f} mm/px)"
         else:
-            from study.see.scale import read_scale
-
             traj = track.track_video(a.input, _track_config(a), shape=shape, scale_from=a.scale_from,
                                      metres_per_pixel=a.metres_per_pixel)
             scale = (f"scale {a.metres_per_pixel * 1000:.2f} mm/px as given" if a.metres_per_pixel is not None

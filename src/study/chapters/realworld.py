@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal, Protocol
 
@@ -113,39 +113,43 @@ class Tracked:
     """Why the video could not be tracked ('' when it was)."""
 
 
-def track_all(videos: Sequence[Video], progress: bool = True) -> dict[str, Tracked]:
-    """Track every video: file name -> :class:`Tracked`. A rendered throw's heights come from the render's camera at
-    the object's depth (``study.methods.tracker.track_rendered``); a real clip's, whose camera is unknown, from
-    one scale, the object's known size over its blob's size at rest (``study.see.gaps.set_scale``)."""
+def _track_each(videos: Sequence[Video], track_one: Callable[[Video, track.TrackConfig], track.Trajectory],
+                desc: str, progress: bool) -> dict[str, Tracked]:
+    """File name -> :class:`Tracked`: each video through ``track_one`` with the tracker set to its colour, or why it
+    could not be tracked."""
     out: dict[str, Tracked] = {}
-    with Progress("track videos", total=len(videos), show=progress, unit="video") as bar:
+    with Progress(desc, total=len(videos), show=progress, unit="video") as bar:
         for v in videos:
             try:
-                cfg = track.TrackConfig(color=v.color, progress=False)
-                out[v.path.name] = Tracked(tracker.track_rendered(v, cfg) if v.truth is not None else
-                                           track.track_video(v.path, cfg, object_size=v.object_size))
+                out[v.path.name] = Tracked(track_one(v, track.TrackConfig(color=v.color, progress=False)))
             except StudyError as e:
                 out[v.path.name] = Tracked(None, str(e))
             bar.update()
     return out
+
+
+def _as_a_user(v: Video, cfg: track.TrackConfig, shape: ObjectShape | None = None) -> track.Trajectory:
+    """``v`` as ``study classify VIDEO --color C --object-size D`` tracks it: no camera, no ground truth; the scale
+    read the default way (``study.see.scale.DEFAULT``) off an object of ``shape`` (None: a ball of the video's
+    ``object_size``)."""
+    return track.track_video(v.path, cfg, shape=shape or ObjectShape("sphere", (v.object_size,)),
+                             scale_from=scale.DEFAULT)
+
+
+def track_all(videos: Sequence[Video], progress: bool = True) -> dict[str, Tracked]:
+    """Track every video: file name -> :class:`Tracked`. A rendered throw's heights come from the render's camera at
+    the object's depth (``study.methods.tracker.track_rendered``); a real clip's, whose camera is unknown, as a
+    user's would (:func:`user_tracks`: ``study classify``'s path)."""
+    return _track_each(videos, lambda v, cfg: tracker.track_rendered(v, cfg) if v.truth is not None else
+                       _as_a_user(v, cfg), "track videos", progress)
 
 
 def user_tracks(videos: Sequence[Video], shape: ObjectShape | None = None,
                 progress: bool = True) -> dict[str, Tracked]:
-    """Every video tracked as ``study classify VIDEO --color C --object-size D`` tracks it: no camera, no ground
-    truth; the pixel scale read the default way (``study.see.scale.DEFAULT``) off an object of ``shape`` (None: a
-    ball of each video's ``object_size``)."""
-    out: dict[str, Tracked] = {}
-    with Progress("track videos (user's path)", total=len(videos), show=progress, unit="video") as bar:
-        for v in videos:
-            got = shape or ObjectShape("sphere", (v.object_size,))
-            try:
-                cfg = track.TrackConfig(color=v.color, progress=False)
-                out[v.path.name] = Tracked(track.track_video(v.path, cfg, shape=got, scale_from=scale.DEFAULT))
-            except StudyError as e:
-                out[v.path.name] = Tracked(None, str(e))
-            bar.update()
-    return out
+    """Every video tracked as ``study classify VIDEO --color C --object-size D`` tracks it, rendered or not: no
+    camera, no ground truth; the scale read the default way off an object of ``shape`` (None: a ball of each
+    video's ``object_size``)."""
+    return _track_each(videos, lambda v, cfg: _as_a_user(v, cfg, shape), "track videos (user's path)", progress)
 
 
 def truth_tracks(videos: Sequence[Video]) -> dict[str, Tracked]:
@@ -496,8 +500,7 @@ def _figures(objects: str = REAL_OBJECTS) -> dict[str, Verdict]:
 # ---------------------------------------------------------------------------------------------
 # The camera sweep: a camera nobody measured (study.methods.sweep, study.methods.camera_cost)
 
-PATH_KEYS: dict[str, PathKey] = {"exact": "exact", "rest size": "rest", "mean silhouette": "mean",
-                                 "gravity": "gravity", "geometry": "geometry"}
+PATH_KEYS: dict[str, PathKey] = {"exact": "exact", **camera_cost.ONE_SCALE, "geometry": "geometry"}  # type: ignore[dict-item]
 """Each path's name in the tables -> its key in the results file."""
 
 
@@ -524,6 +527,10 @@ class CameraSweep:
     def recommended(self) -> camera_cost.Measured:
         return self.measured[self.choice]
 
+    def clips_in(self, group: str) -> int:
+        """Clips in ``group`` ('all' or a camera family)."""
+        return sum(group in ("all", c.shot.family) for c in self.clips)
+
 
 def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) -> CameraSweep:
     """The camera sweep on ``runner``'s preset (``preset.sweep_per_family`` clips a family, rendered once and
@@ -535,13 +542,21 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
                             frame_scale=p.sweep_frame_scale, duration=p.length)
     shape = camera_cost.shape_of(cfg)
     tracked = camera_cost.track_clips(clips, shape, progress=progress)
-    measured = {name: camera_cost.measure(ens.members, clips, tracked) for name, ens in rec.models.items()}
+    reads: dict[tuple[float, int], tuple[dict[str, np.ndarray], dict[str, np.ndarray]]] = {}
+
+    def read(m: Model) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:  # the candidates share one input
+        if (m.fps, m.n_frames) not in reads:
+            reads[m.fps, m.n_frames] = camera_cost.inputs(clips, tracked, m.fps, m.n_frames)
+        return reads[m.fps, m.n_frames]
+
+    measured = {name: camera_cost.measure(ens.members, clips, tracked, read(ens.members[0]))
+                for name, ens in rec.models.items()}
     first = rec.model.members[0]
     fps, n = first.fps, first.n_frames
     contact = cfg.shape.bounding_radius
     ds = runner.dataset
     f_train = measure.fall_acceleration(ds.train.x[:, : round(n * ds.fps / fps), 2], ds.fps, contact)
-    drag = camera_cost.drag_rule(f_train, ds.train.y, clips, tracked, fps, n, contact)
+    drag = camera_cost.drag_rule(f_train, ds.train.y, clips, read(first)[0], fps, contact)
     times = sweep.render_times(clips)
     cpu, wall = (sum(t[k] for t in times.values()) for k in ("cpu_s", "wall_s"))
     return CameraSweep(tuple(clips), measured, rec.choice, camera_cost.floors(clips, tracked), drag,
@@ -558,7 +573,7 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
             None if r.cost is None else number(r.cost, f"camera sweep ({g}): exact heights' accuracy minus {k}'s",
                                                signed=True))
             for k, r in rows.items()}
-        groups[g] = SweepGroup(count(sum(g in ("all", c.shot.family) for c in cs.clips), f"camera sweep ({g}): clips"),
+        groups[g] = SweepGroup(count(cs.clips_in(g), f"camera sweep ({g}): clips"),
                                number(1000 * cs.floors[g].true_rows if g in cs.floors else math.nan,
                                       f"camera sweep ({g}): least one-scale height error", unit="mm"), paths)
     drag = {PATH_KEYS[k]: number(iv, f"camera sweep: drag rule's accuracy, heights {k}") for k, iv in cs.drag.items()}
@@ -573,7 +588,7 @@ def _sweep_table(cs: CameraSweep) -> Table:
     camera's cost."""
     rows = []
     for g, res in cs.recommended.results.items():
-        row = {"group": g, "clips": sum(g in ("all", c.shot.family) for c in cs.clips),
+        row = {"group": g, "clips": cs.clips_in(g),
                "exact": pct_ci(res["exact"].accuracy)}
         for k in camera_cost.PATHS:
             r = res[k]
@@ -600,7 +615,7 @@ def _heights_table(cs: CameraSweep) -> Table:
 
 def _candidates_sweep_table(cs: CameraSweep) -> Table:
     """Every candidate on the sweep, pooled: exact heights against the default path."""
-    default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+    default = camera_cost.DEFAULT_PATH
     rows = []
     for name, m in cs.measured.items():
         r = m.results["all"]
@@ -619,7 +634,7 @@ def _render_heights_table(render_heights: dict[str, tuple[float, float]], cs: Ca
         return "—" if math.isnan(pair[0]) else f"{pair[1]:.0f} ({pair[0]:.0f})"
 
     sweep_all = cs.recommended.results["all"]
-    rows = [{"path": k + (" (default)" if SCALE_PATH.get(k) == scale.DEFAULT else ""), "book": mm(render_heights[k]),
+    rows = [{"path": k + (" (default)" if k == camera_cost.DEFAULT_PATH else ""), "book": mm(render_heights[k]),
              "sweep": mm((sweep_all[k].rms_mm, sweep_all[k].rms_centred_mm))} for k in camera_cost.PATHS]
     return Table(rows, {"path": "path", "book": "the book's renders: mm RMS, median removed (raw)",
                         "sweep": "the camera sweep: the same"})
@@ -628,10 +643,6 @@ def _render_heights_table(render_heights: dict[str, tuple[float, float]], cs: Ca
 def _drag_table(cs: CameraSweep) -> Table:
     rows = [{"path": k, "acc": pct_ci(iv)} for k, iv in cs.drag.items()]
     return Table(rows, {"path": "heights", "acc": "drag rule's accuracy on the sweep [95 % CI]"})
-
-
-SCALE_PATH = {"rest size": "rest", "mean silhouette": "mean", "gravity": "gravity"}
-"""The one-scale paths' names (``study.methods.camera_cost.PATHS``) -> ``study.see.scale.SCALE_FROM``."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -748,7 +759,7 @@ class RealWorld:
         """The camera sweep's answer in one sentence: the recommended model's accuracy on exact heights and by
         the default path, pooled, and the family where the camera costs most."""
         res = self.camera.recommended.results
-        default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+        default = camera_cost.DEFAULT_PATH
         worst = max((g for g in res if g != "all"), key=lambda g: res[g][default].cost.value)
         a = res["all"]
         return (f"On {len(self.camera.clips)} clips from cameras the study never saw, the recommended model labels "
@@ -760,7 +771,7 @@ class RealWorld:
     def drag_words(self) -> str:
         """Whether the drag cue survives a user's camera: the drag rule's interval on each path against chance."""
         d = self.camera.drag
-        default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+        default = camera_cost.DEFAULT_PATH
         at_chance = [k for k in camera_cost.PATHS if d[k].lo <= 0.5]
         verdict = ("it does not survive: on " + ", ".join(at_chance) + " heights the rule's interval holds chance"
                    if at_chance else "it survives every path (each interval above chance)")
@@ -773,7 +784,7 @@ class RealWorld:
         """Which path a user should take: the best path's paired difference against the default."""
         m = self.camera.recommended
         res = m.results["all"]
-        default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+        default = camera_cost.DEFAULT_PATH
         best = max(camera_cost.PATHS, key=lambda k: res[k].accuracy.value)
         if best == default:
             return f"the default ({default}) is also the most accurate path on the sweep"
@@ -811,7 +822,7 @@ class RealWorld:
     @property
     def models_words(self) -> str:
         """The camera's cost to each candidate, by how it was trained."""
-        default = next(k for k, v in SCALE_PATH.items() if v == scale.DEFAULT)
+        default = camera_cost.DEFAULT_PATH
         parts = [f"{name} {points(m.results['all'][default].cost)}" for name, m in self.camera.measured.items()]
         return "the camera's cost in points, exact heights minus the default path: " + "; ".join(parts)
 

@@ -33,7 +33,7 @@ from study.methods.sweep import Clip
 from study.methods.videos import Video
 from study.see import geometry, render, track
 from study.see.gaps import set_scale
-from study.see.scale import ObjectShape, read_scale
+from study.see.scale import DEFAULT, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 from study.simulate import measure as motion
 
@@ -62,9 +62,12 @@ def _geometry(traj: Trajectory, shape: ObjectShape) -> Trajectory:
     return replace(traj, z=z, ground_z=0.0, units="m")
 
 
+ONE_SCALE: dict[str, str] = {"rest size": "rest", "mean silhouette": "mean", "gravity": "gravity"}
+"""The one-scale paths -> how each reads its scale (``study.see.scale.SCALE_FROM``)."""
+DEFAULT_PATH = next(name for name, how in ONE_SCALE.items() if how == DEFAULT)
+"""The path ``study classify VIDEO`` takes unless told otherwise (``study.see.scale.DEFAULT``)."""
 SCALE: dict[str, Callable[[Trajectory, ObjectShape], Trajectory]] = {
-    "rest size": _one_scale("rest"), "mean silhouette": _one_scale("mean"), "gravity": _one_scale("gravity"),
-    "geometry": _geometry}
+    **{name: _one_scale(how) for name, how in ONE_SCALE.items()}, "geometry": _geometry}
 """Each path: a pixel trajectory and the object's shape -> the trajectory with heights in metres."""
 
 
@@ -173,19 +176,25 @@ def floors(clips: Sequence[Clip], tracked: Sequence[Heights]) -> dict[str, Floor
     return {g: Floor(*np.sqrt(np.mean(np.square(r), axis=0)).tolist(), len(r)) for g, r in rows.items()}
 
 
+def _errors(h: Heights, path: str) -> np.ndarray:
+    """(frames,) one video's height error by ``path`` on every frame it has a height for, metres."""
+    got = h.paths[path]
+    return np.array([]) if isinstance(got, str) else (got - h.exact)[np.isfinite(got)]
+
+
+def _rms_mm(errors: Sequence[np.ndarray]) -> tuple[float, float]:
+    """(root-mean-square over every frame, the same after removing each video's median error), millimetres, of
+    several videos' height errors (NaN for none)."""
+    e = [x for x in errors if len(x)]
+    if not e:
+        return math.nan, math.nan
+    raw, centred = np.concatenate(e), np.concatenate([x - np.median(x) for x in e])
+    return 1000 * float(np.sqrt(np.mean(raw**2))), 1000 * float(np.sqrt(np.mean(centred**2)))
+
+
 def height_errors(tracked: Sequence[Heights]) -> dict[str, tuple[float, float]]:
-    """Each path's height error over ``tracked`` videos: path -> (root-mean-square over every frame with a height,
-    the same after removing each video's median error), millimetres (NaN for a path with no heights)."""
-    out = {}
-    for k in PATHS:
-        e = [(h.paths[k] - h.exact)[np.isfinite(h.paths[k])] for h in tracked if not isinstance(h.paths[k], str)]
-        e = [x for x in e if len(x)]
-        if not e:
-            out[k] = (math.nan, math.nan)
-            continue
-        raw, centred = np.concatenate(e), np.concatenate([x - np.median(x) for x in e])
-        out[k] = (1000 * float(np.sqrt(np.mean(raw**2))), 1000 * float(np.sqrt(np.mean(centred**2))))
-    return out
+    """Each path's height error over ``tracked`` videos: path -> :func:`_rms_mm` (raw, median removed), mm."""
+    return {k: _rms_mm([_errors(h, k) for h in tracked]) for k in PATHS}
 
 
 @dataclass(frozen=True)
@@ -251,42 +260,37 @@ class Measured:
         return bootstrap_difference(self.correct[a][:, sel], self.correct[b][:, sel])
 
 
-def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]) -> Measured:
+def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights],
+            read: tuple[dict[str, np.ndarray], dict[str, np.ndarray]] | None = None) -> Measured:
     """Every path on ``clips`` (their :func:`track_clips`, ``tracked``) classified by each of ``members`` (trained
-    'z' models: the seeds of one configuration, each with ``predict_proba``, ``fps`` and ``n_frames``)."""
+    'z' models: the seeds of one configuration, each with ``predict_proba``, ``fps`` and ``n_frames``). ``read``:
+    the clips' :func:`inputs` at the members' rate and length, if already made (several models share them)."""
     first = members[0]
-    x, missing = inputs(clips, tracked, first.fps, first.n_frames)
+    x, missing = read if read is not None else inputs(clips, tracked, first.fps, first.n_frames)
     y = np.array([c.video.label == "heavy" for c in clips])
     correct = {k: np.stack([(np.asarray(m.predict_proba(xk))[:, 1] > 0.5) == y for m in members]) & ~missing[k]
                for k, xk in x.items()}
-    errors: dict[str, list[np.ndarray]] = {"exact": [np.zeros(1)] * len(clips)}
-    for k in PATHS:
-        errors[k] = [np.array([]) if isinstance(h.paths[k], str) else (h.paths[k] - h.exact)[np.isfinite(h.paths[k])]
-                     for h in tracked]
+    errors = {"exact": [np.zeros(1)] * len(clips), **{k: [_errors(h, k) for h in tracked] for k in PATHS}}
     fams = tuple(c.shot.family for c in clips)
     out: dict[str, dict[str, PathResult]] = {}
     for g in ("all", *dict.fromkeys(fams)):
         sel = np.array([g in ("all", f) for f in fams])
         out[g] = {}
         for k in x:
-            e = [errors[k][i] for i in np.flatnonzero(sel) if len(errors[k][i])]
-            pooled = np.concatenate(e) if e else np.array([np.nan])
-            centred = np.concatenate([v - np.median(v) for v in e]) if e else np.array([np.nan])
+            raw, centred = _rms_mm([errors[k][i] for i in np.flatnonzero(sel)])
             out[g][k] = PathResult(
                 bootstrap_accuracy(correct[k][:, sel]),
                 None if k == "exact" else bootstrap_difference(correct["exact"][:, sel], correct[k][:, sel]),
-                1000 * float(np.sqrt(np.mean(pooled**2))), 1000 * float(np.sqrt(np.mean(centred**2))),
-                int(missing[k][sel].sum()))
+                raw, centred, int(missing[k][sel].sum()))
     return Measured(out, correct, fams)
 
 
-def drag_rule(f_train: np.ndarray, y_train: np.ndarray, clips: Sequence[Clip], tracked: Sequence[Heights],
-              fps: float, n_frames: int, contact_height: float) -> dict[str, Interval]:
+def drag_rule(f_train: np.ndarray, y_train: np.ndarray, clips: Sequence[Clip], x: dict[str, np.ndarray],
+              fps: float, contact_height: float) -> dict[str, Interval]:
     """The drag rule (one threshold on the first fall's vertical acceleration, ``study.simulate.measure``), its
     threshold chosen on the training throws' exact accelerations ``f_train`` (n,) m/s^2 with labels ``y_train``
-    (n,), scored on the sweep's clips read by each path (and exactly): path -> accuracy over the clips. A clip
-    without heights gets the training median's label."""
-    x, _ = inputs(clips, tracked, fps, n_frames)
+    (n,), scored on ``clips`` read by each path (and exactly) at ``fps`` (``x``: their :func:`inputs`): path ->
+    accuracy over the clips. A clip without heights gets the training median's label."""
     y = np.array([c.video.label == "heavy" for c in clips], int)
     out = {}
     for k, xk in x.items():

@@ -111,7 +111,7 @@ class Scale:
         return f"scale {1000 * self.metres_per_pixel:.2f} mm/px ({self.size_m:.3f} m over a {self.blob_px:.1f}-px blob, {what})"
 
 
-def read_scale(traj: Trajectory, shape: ObjectShape, how: str = "mean") -> Scale:
+def read_scale(traj: Trajectory, shape: ObjectShape, how: str = DEFAULT) -> Scale:
     """Metres per pixel of ``traj`` (pixels, from the tracker) for an object of ``shape``, read ``how``
     (:data:`SCALE_FROM`). Raise :class:`TrackingError` when no blob size was measured."""
     if how not in SCALE_FROM:
