@@ -32,7 +32,7 @@ def main(argv: list[str] | None = None) -> int:
     p = preset("smoke")
     with tempfile.TemporaryDirectory() as tmp:
         ds = synth.dataset("smoke", seed=0, data_dir=Path(tmp) / "data", progress=False)
-        base = dataclasses.replace(p.base_config(), max_epochs=a.epochs, min_epochs=a.epochs)
+        base = dataclasses.replace(p.base_config(), epochs=a.epochs, min_epochs=a.epochs)
         cfgs = paper.seed_configs(base, tuple(range(a.runs // 2)))
         t0 = time.perf_counter()
         local = schedule.run_all(ds, cfgs, Path(tmp) / "pool", True, workers=workers)

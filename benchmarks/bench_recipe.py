@@ -49,14 +49,14 @@ CANDIDATES: dict[str, dict[str, Any]] = {
     "constant (before)": dict(RAW),
     "plateau": {"lr_schedule": "plateau", **RAW},
     "constant + EMA": {"average": "ema"},
-    "cosine 60, 3e-3, warm-up 3": {"lr_schedule": "cosine", "max_epochs": 60, "lr": 3e-3, "warmup_epochs": 3, **RAW},
-    "cosine 60, 3e-3, warm-up 3, EMA": {"lr_schedule": "cosine", "max_epochs": 60, "lr": 3e-3, "warmup_epochs": 3,
+    "cosine 60, 3e-3, warm-up 3": {"lr_schedule": "cosine", "epochs": 60, "lr": 3e-3, "warmup_epochs": 3, **RAW},
+    "cosine 60, 3e-3, warm-up 3, EMA": {"lr_schedule": "cosine", "epochs": 60, "lr": 3e-3, "warmup_epochs": 3,
                                         "average": "ema"},
-    "cosine 100, 1e-3": {"lr_schedule": "cosine", "max_epochs": 100, **RAW},
-    "cosine 100, 1e-3, EMA": {"lr_schedule": "cosine", "max_epochs": 100, "average": "ema"},
+    "cosine 100, 1e-3": {"lr_schedule": "cosine", "epochs": 100, **RAW},
+    "cosine 100, 1e-3, EMA": {"lr_schedule": "cosine", "epochs": 100, "average": "ema"},
     "constant + EMA 0.995": {"average": "ema", "ema_decay": 0.995},
-    "cosine 150, 1e-3": {"lr_schedule": "cosine", "max_epochs": 150, **RAW},
-    "batch 128, 4e-3, cosine 60, warm-up 3": {"lr_schedule": "cosine", "max_epochs": 60, "lr": 4e-3,
+    "cosine 150, 1e-3": {"lr_schedule": "cosine", "epochs": 150, **RAW},
+    "batch 128, 4e-3, cosine 60, warm-up 3": {"lr_schedule": "cosine", "epochs": 60, "lr": 4e-3,
                                               "warmup_epochs": 3, "batch_size": 128, **RAW},
 }
 """Recipe name -> the TrainConfig fields it sets (the rest: TrainConfig's defaults, patience 20 and so on)."""
@@ -105,7 +105,7 @@ def config(recipe: dict[str, Any], network: dict[str, Any], seed: int, smoke: bo
     cfg = dataclasses.replace(TrainConfig(), seed=seed, **network, **recipe)
     if smoke:
         warm = min(cfg.warmup_epochs, 1)
-        cfg = dataclasses.replace(cfg, length=1.0, truncation=10, max_epochs=SMOKE_EPOCHS, min_epochs=2, patience=2,
+        cfg = dataclasses.replace(cfg, length=1.0, truncation=10, epochs=SMOKE_EPOCHS, min_epochs=2, patience=2,
                                   warmup_epochs=warm)
     cfg.check()
     return cfg

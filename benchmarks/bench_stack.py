@@ -74,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
     device = torch.device(a.device)
     torch.set_num_threads(1)
     ds = synthetic()
-    cfg = TrainConfig(max_epochs=a.epochs, min_epochs=a.epochs, patience=a.epochs + 1)
+    cfg = TrainConfig(epochs=a.epochs, min_epochs=a.epochs, patience=a.epochs + 1)
     print(f"Table 1's shape: {len(ds.train)} throws, 90 frames, Z, 2 x 64 peephole LSTM, batch 32; {a.epochs} epochs a "
           f"run; device {device}; time loop {native.backend() if device.type == 'cpu' else 'PyTorch (batched)'}")
     stack.train([(ds, cfg)], device)  # warm up: the compiled loop, the allocator
@@ -104,7 +104,7 @@ def profile(ds: Dataset, cfg: TrainConfig, device: torch.device, K: int) -> None
     from torch.profiler import ProfilerActivity
     from torch.profiler import profile as torch_profile
 
-    one_epoch = dataclasses.replace(cfg, max_epochs=1, min_epochs=1)
+    one_epoch = dataclasses.replace(cfg, epochs=1, min_epochs=1)
     for k in sorted({1, K}):
         runs = [(ds, dataclasses.replace(one_epoch, seed=s)) for s in range(k)]
         with torch_profile(activities=[ProfilerActivity.CPU]) as prof:

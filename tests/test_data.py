@@ -63,3 +63,22 @@ def test_not_a_dataset(tmp_path):
     np.savez(tmp_path / "other.npz", a=np.zeros(3))
     with pytest.raises(DataError, match="not a study dataset"):
         data.load(tmp_path / "other.npz")
+
+
+def test_a_csv_given_as_a_dataset_is_named_for_what_it_is(tmp_path):
+    (tmp_path / "mine.csv").write_text("t,x,y,z\n0,0,0,0.1\n")
+    with pytest.raises(DataError, match="mine.csv: a text file, not a data set.*study classify CSV") as e:
+        data.load(tmp_path / "mine.csv")
+    assert "delete it and rebuild" not in str(e.value)  # a cache file's advice, which it said before
+
+
+def test_written_files_follow_the_umask(tmp_path):
+    import os
+    old = os.umask(0o022)
+    try:
+        path = data.save(toy_dataset(), tmp_path / "d.npz")
+        assert path.stat().st_mode & 0o777 == 0o644  # 0o600 before: tempfile's mode, whatever the umask
+        os.umask(0o077)
+        assert data.save(toy_dataset(), tmp_path / "e.npz").stat().st_mode & 0o777 == 0o600
+    finally:
+        os.umask(old)

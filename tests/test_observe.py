@@ -225,3 +225,48 @@ def test_bad_model_parameters_name_their_field(make, match):
 def test_bad_train_config_model_fields_name_themselves(field, value):
     with pytest.raises(ConfigError, match=f"TrainConfig.{field}"):
         TrainConfig(**{field: value}).check()
+
+
+def test_a_far_square_on_camera_films_the_heights_as_they_are():
+    x = parabolas(3)
+    for throw in x:
+        seen = observe.filmed(throw, observe.AnyCamera(height=1.0, tilt=0.0, yaw=0.0, distance=500.0),
+                              rest_height=0.0)
+        z = throw[:, 2] - throw[:, 2].min()
+        assert np.abs(seen[:, 2] - z).max() < 0.02 and not seen[:, :2].any()
+
+
+def test_filmed_reads_the_sweeps_camera_as_study_classify_does():
+    """The rows and the mean-size scale of :func:`observe.filmed` are the sweep's camera's projection and
+    ``read_scale(how='mean')`` on an exact blob: two independent codings of one camera agree."""
+    from study.methods import sweep
+
+    throw = observe.turned_across_view(parabolas(1, seed=4))[0]
+    shot = sweep.Shot(family="oblique", height=1.7, tilt=30.0, yaw=-40.0, distance=4.0, fov=60.0, width=854,
+                      height_px=480, fps=30.0, colour="red", floor=sweep.FLOORS[0], light=0.8)
+    cam = sweep.camera(shot, throw)
+    v = cam.project(throw)[:, 1]
+    blob = cam.focal * 0.2 / cam.depth_of(throw)  # an object 0.2 m across
+    scale = 0.2 / np.sqrt(np.mean(blob**2))
+    expected = (v.max() - v) * scale + observe.REST_HEIGHT
+    seen = observe.filmed(throw, observe.AnyCamera(height=1.7, tilt=30.0, yaw=-40.0, distance=4.0))
+    np.testing.assert_allclose(seen[:, 2], expected, atol=1e-9)
+    assert np.abs(seen[:, 2] - throw[:, 2]).max() > 0.05, "an oblique camera from above distorts the heights"
+
+
+def test_any_camera_is_seeded_and_gives_heights_only():
+    x = parabolas(6)
+    a = observe.any_camera(x, 30.0, np.random.default_rng(3))
+    b = observe.any_camera(x, 30.0, np.random.default_rng(3))
+    assert np.array_equal(a, b) and a.shape == x.shape and not a[:, :, :2].any() and np.isfinite(a).all()
+    assert not np.array_equal(a, observe.any_camera(x, 30.0, np.random.default_rng(4)))
+
+
+def test_a_camera_the_throw_passes_behind_is_refused_or_moved_back():
+    x = parabolas(1)[0]
+    assert observe.filmed(x, observe.AnyCamera(distance=0.5, yaw=80.0)) is None
+    with pytest.raises(ConfigError, match="AnyCamera.distance"):
+        observe.AnyCamera(distance=0.1).validate()
+    with pytest.raises(ConfigError, match="any_camera"):
+        observe.any_camera(x[None], 30.0, np.random.default_rng(0),
+                           observe.AnyCameraRanges(distance=(0.5, 0.5), yaw=(85.0, 85.0), tries=1))

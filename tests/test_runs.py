@@ -21,7 +21,7 @@ from study.runs.runtable import Run, Runs
 
 TINY = runs.Preset(
     name="tiny", length=0.5, lrs=(1e-2,), truncations=(5, 15), dropouts=(0.2,), batch_sizes=(8,),
-    grid_seeds=(0, 1), seeds=(0, 1), lengths=(0.3, 0.5), length_seeds=(0,), max_epochs=1, patience=1, min_epochs=0,
+    grid_seeds=(0, 1), seeds=(0, 1), lengths=(0.3, 0.5), length_seeds=(0,), epochs=1, patience=1, min_epochs=0,
     long_lengths=(0.5,), protocol_seeds=(0,),
 )
 
@@ -48,7 +48,7 @@ def test_pipeline_rows_and_cache(tmp_path, ds, monkeypatch):
     assert [(g.config.truncation, g.n) for g in points] == [(5, 2), (15, 2)]
     cfg = r.table1_config()
     best = max(points, key=lambda g: g.val_mean)
-    assert cfg.dims == "z" and cfg.truncation == best.config.truncation and cfg.max_epochs == 1, "chosen by the mean"
+    assert cfg.dims == "z" and cfg.truncation == best.config.truncation and cfg.epochs == 1, "chosen by the mean"
     seeds = r.seed_runs(cfg)
     assert [(g.get("dims"), g.seed) for g in seeds] == [("z", 0), ("z", 1), ("xyz", 0), ("xyz", 1)]
     assert all(0 <= g.accuracy <= 1 and g.correct.shape == (16,) for g in seeds)
@@ -206,8 +206,8 @@ def test_the_run_validation_picks_is_one_statistic_over_one_data_set_or_several(
 def test_presets():
     big = runs.preset("paper")
     assert len(big.grid_seeds) >= 3 and len(big.seeds) >= 5 and big.n_grid() >= 2 and big.n_grid('gru') >= big.n_grid()
-    assert big.min_epochs >= 20 and big.max_epochs > 2 * big.min_epochs
-    assert runs.preset("smoke").max_epochs < big.max_epochs
+    assert big.min_epochs >= 20 and big.epochs > 2 * big.min_epochs
+    assert runs.preset("smoke").epochs < big.epochs
     assert big.base_config() == train.TrainConfig(), "the paper preset trains with TrainConfig's own protocol"
     assert big.base_config() in paper.grid_configs(big), "the grid holds the defaults"
     assert set(runs.PRESETS) == set(presets.NAMES)
@@ -273,7 +273,7 @@ def test_a_worker_that_computes_another_key_refuses(tmp_path, ds):
     assert not (tmp_path / "runs").exists(), "it writes nothing"
 
 
-@pytest.mark.slow  # trains four tiny models
+@pytest.mark.slow  # trains twelve tiny models
 def test_the_recommended_model_is_the_best_candidate_on_observed_validation_throws(tmp_path):
     from study.simulate import observe
 
@@ -282,14 +282,15 @@ def test_the_recommended_model_is_the_best_candidate_on_observed_validation_thro
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     ob = observe.Observation(noise=0.01, drop=0.1)
     cands = realworld.candidates(r, {"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}, ob)
-    assert list(cands) == ["positions, exact", "positions, randomised", "velocity, exact", "velocity, randomised"]
+    assert list(cands) == [f"{i}, {t}" for i in ("positions", "velocity") for t in ("exact", "randomised", "any-camera")]
     assert cands["velocity, randomised"].observe == "randomised" and cands["velocity, randomised"].observe_noise == 0.01
+    assert cands["velocity, any-camera"] == dataclasses.replace(cands["velocity, randomised"], observe="any-camera")
     rec = realworld.recommended(r, cands, seeds=(0, 1), ob=ob)
     choice, val, models = rec.choice, rec.val, rec.models
     assert set(val) == set(models) == set(cands) and choice == max(val, key=lambda k: val[k].value)
     assert rec.model is models[choice]
     assert [m.config for m in models[choice].members] == [dataclasses.replace(cands[choice], seed=s) for s in (0, 1)]
-    assert r.plan.n_models == 8 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
+    assert r.plan.n_models == 12 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
     with pytest.raises(ConfigError, match="seeds is empty"):
         realworld.recommended(r, cands, seeds=(), ob=ob)
 

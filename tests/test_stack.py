@@ -13,13 +13,13 @@ from study.learn import native, stack
 from study.learn.config import TrainConfig
 from study.runs import records, schedule
 
-SMOKE = TrainConfig(length=1.0, max_epochs=4, patience=2, min_epochs=2, truncation=10)
+SMOKE = TrainConfig(length=1.0, epochs=4, patience=2, min_epochs=2, truncation=10)
 """A short training at the smoke data set's shape; every member below shares it but for seed, rate and dropout."""
-OTHERS = [dataclasses.replace(SMOKE, seed=s, lr=lr, dropout=d, max_epochs=e, min_epochs=min(e, 2)) for s, lr, d, e in
+OTHERS = [dataclasses.replace(SMOKE, seed=s, lr=lr, dropout=d, epochs=e, min_epochs=min(e, 2)) for s, lr, d, e in
           ((1, 3e-3, 0.2, 4), (2, 1e-3, 0.0, 2), (3, 1e-3, 0.5, 4), (4, 2e-3, 0.2, 1), (5, 1e-3, 0.2, 4),
            (6, 1e-3, 0.1, 3), (7, 3e-4, 0.2, 4))]
 """Other members: other seeds, learning rates, dropouts and epoch caps (so the stack shrinks as they stop)."""
-RECIPE = dataclasses.replace(SMOKE, lr_schedule="cosine", warmup_epochs=1, max_epochs=3, average="ema", ema_decay=0.9)
+RECIPE = dataclasses.replace(SMOKE, lr_schedule="cosine", warmup_epochs=1, epochs=3, average="ema", ema_decay=0.9)
 """A member on a cosine budget with a warm-up, validating and keeping the moving average of its weights."""
 
 
@@ -51,8 +51,8 @@ def test_a_recipe_member_is_its_own_run_and_leaves_the_others_theirs(smoke_datas
     alone = _records(smoke_dataset, [RECIPE, SMOKE], tmp_path, "alone")
     mixed = _records(smoke_dataset, [OTHERS[0], RECIPE, SMOKE], tmp_path, "mixed")
     assert mixed[1] == alone[0] and mixed[2] == alone[1]
-    assert alone[0]["epochs_run"] == RECIPE.max_epochs, "a cosine budget runs every epoch"
-    assert [h["lr"] for h in alone[0]["history"]] == [RECIPE.lr_at(e) for e in range(RECIPE.max_epochs)]
+    assert alone[0]["epochs_run"] == RECIPE.epochs, "a cosine budget runs every epoch"
+    assert [h["lr"] for h in alone[0]["history"]] == [RECIPE.lr_at(e) for e in range(RECIPE.epochs)]
 
 
 @pytest.mark.slow  # trains 4 smoke runs on the PyTorch loop

@@ -227,7 +227,7 @@ def test_cli_hsv_out_of_range_exits_2(rendered, capsys):
 @pytest.fixture(scope="module")
 def z_model(tmp_path_factory) -> tuple[Path, train.TrainedModel]:
     """A real Z-only model, trained in a second on toy bounces (what it predicts does not matter here)."""
-    cfg = train.TrainConfig(dims="z", length=2.0, hidden=8, max_epochs=1, batch_size=8, truncation=10)
+    cfg = train.TrainConfig(dims="z", length=2.0, hidden=8, epochs=1, batch_size=8, truncation=10)
     tm = train.fit(model_toys.dataset(n=16, T=60), cfg, progress=False)
     return tm.save(tmp_path_factory.mktemp("model") / "z"), tm
 
@@ -257,7 +257,7 @@ def test_cli_classify_video_and_csv(rendered, tmp_path, z_model, capsys):
 
 
 def test_cli_classify_rejects_xyz_model(rendered, tmp_path, capsys):
-    cfg = train.TrainConfig(dims="xyz", length=0.5, hidden=4, max_epochs=1, batch_size=8, truncation=5)
+    cfg = train.TrainConfig(dims="xyz", length=0.5, hidden=4, epochs=1, batch_size=8, truncation=5)
     folder = train.fit(model_toys.dataset(n=8, T=15), cfg, progress=False).save(tmp_path / "xyz")
     rc = cli.main(["classify", "--model", str(folder), str(rendered.video), "--color", "orange"])
     assert rc == 2 and "'z'" in capsys.readouterr().err

@@ -16,7 +16,7 @@ from study.learn import train
 from study.learn.config import CELLS, OLD_MEANING, TrainConfig
 from study.simulate import data
 
-TINY = train.TrainConfig(dims="xyz", length=0.5, hidden=8, max_epochs=2, batch_size=8, truncation=5, patience=2)
+TINY = train.TrainConfig(dims="xyz", length=0.5, hidden=8, epochs=2, batch_size=8, truncation=5, patience=2)
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def test_same_seed_same_weights_bitwise(ds, tm):
 
 def test_history_and_contract(ds, tm):
     assert tm.dims == "xyz" and tm.fps == 30.0 and tm.n_frames == 15 and tm.data_key == "toy"
-    assert 1 <= len(tm.history) <= TINY.max_epochs
+    assert 1 <= len(tm.history) <= TINY.epochs
     assert set(tm.history[0]) == {"epoch", "train_loss", "val_loss", "val_accuracy", "lr"}
     assert tm.diverged_epoch is None
     p = tm.predict_proba(ds.test.x)
@@ -103,6 +103,9 @@ def test_model_dir_missing_a_file(tmp_path, tm, name):
 def test_model_dir_bad_contents(tmp_path, tm):
     with pytest.raises(ModelError, match="no such directory"):
         train.load(tmp_path / "none")
+    (tmp_path / "weights.pt").write_bytes(b"x")
+    with pytest.raises(ModelError, match="is a file; give the model's directory"):  # said "no such directory" before
+        train.load(tmp_path / "weights.pt")
     out = tm.save(tmp_path / "m")
     (out / "weights.pt").write_bytes(b"garbage")
     with pytest.raises(ModelError, match="weights.pt"):
@@ -117,13 +120,21 @@ def test_model_dir_bad_contents(tmp_path, tm):
         train.load(out)
 
 
-def test_bad_config(ds):
+def test_bad_config_is_refused_where_it_is_made():
     for bad, match in [(dict(dims="xy"), "dims"), (dict(length=0.0), "length"), (dict(length=-1.0), "length"),
                        (dict(cell="rnn"), "cell"), (dict(truncation=0), "truncation"), (dict(dropout=1.0), "dropout"),
                        (dict(rotate=-1.0), "rotate"), (dict(rotate=181.0), "rotate"),
-                       (dict(rotate=90.0, dims="z"), "rotate .* dims 'z'"), (dict(inputs="heading"), "inputs")]:
-        with pytest.raises(ConfigError, match=match):
-            train.fit(ds, dataclasses.replace(TINY, **bad), progress=False)
+                       (dict(rotate=90.0, dims="z"), "rotate .* dims 'z'"), (dict(inputs="heading"), "inputs"),
+                       (dict(dims="Z"), "dims = 'Z' is unknown; use 'z' \\(lower case\\)"),
+                       (dict(epochs=0), "TrainConfig.epochs"), (dict(observe="Any-Camera"), "use 'any-camera'")]:
+        with pytest.raises(ConfigError, match=match):  # at construction: before, dims="Z" failed only at fit
+            dataclasses.replace(TINY, **bad)
+
+
+def test_the_epoch_budget_has_one_name_everywhere():
+    assert TrainConfig(epochs=7).epochs == 7  # the --epochs flag's name; TrainConfig(epochs=...) was refused before
+    with pytest.raises(TypeError, match="max_epochs"):
+        TrainConfig(max_epochs=7)
 
 
 def test_bad_data(ds, tm):
@@ -151,7 +162,7 @@ def test_metrics_confusion_rows_true_cols_predicted():
 @pytest.mark.slow
 def test_learns_the_toy_problem():
     ds = model_toys.dataset(n=64, T=45)
-    cfg = train.TrainConfig(dims="z", length=1.5, hidden=16, max_epochs=15, batch_size=16, lr=1e-2, patience=15)
+    cfg = train.TrainConfig(dims="z", length=1.5, hidden=16, epochs=15, batch_size=16, lr=1e-2, patience=15)
     tm = train.fit(ds, cfg, progress=False)
     assert train.evaluate(tm, ds.test)["accuracy"] >= 0.8
 
@@ -203,7 +214,7 @@ def test_cli_bad_input_one_line_exit_2(tmp_path, smoke_dataset, capsys):
 def test_a_run_that_cannot_learn_says_it_failed(ds):
     rng = np.random.default_rng(0)
     shuffled = dataclasses.replace(ds, train=dataclasses.replace(ds.train, y=rng.permutation(ds.train.y)))
-    cfg = dataclasses.replace(TINY, dims="z", max_epochs=3, min_epochs=0)
+    cfg = dataclasses.replace(TINY, dims="z", epochs=3, min_epochs=0)
     with pytest.warns(train.TrainingFailedWarning, match="failed to train.*--lr"):
         tm = train.fit(shuffled, cfg, progress=False)
     assert tm.failed and "never left the initial plateau" in tm.failure()
@@ -278,7 +289,7 @@ def test_gru_has_no_forget_gate_to_initialise():
 
 def test_fit_starts_from_the_configured_forget_bias(ds):
     def mean_forget(bias):
-        tm = train.fit(ds, dataclasses.replace(FROZEN, forget_bias=bias, max_epochs=1), progress=False)
+        tm = train.fit(ds, dataclasses.replace(FROZEN, forget_bias=bias, epochs=1), progress=False)
         return float(_forget_biases(tm.net).mean())
 
     assert mean_forget(1.0) == pytest.approx(mean_forget(0.0) + 1.0, abs=1e-4)
@@ -288,13 +299,13 @@ def test_fit_starts_from_the_configured_forget_bias(ds):
 def test_early_stopping_cannot_fire_before_min_epochs(ds, min_epochs, expected):
     """No weight moves, so the first epoch stays the best: patience 1 stops at the second epoch, unless
     the minimum holds the run longer."""
-    cfg = dataclasses.replace(FROZEN, patience=1, min_epochs=min_epochs, max_epochs=10)
+    cfg = dataclasses.replace(FROZEN, patience=1, min_epochs=min_epochs, epochs=10)
     tm = train.fit(ds, cfg, progress=False)
     assert len(tm.history) == expected and tm.best_epoch == 0
 
 
 def test_plateau_schedule_halves_the_rate_when_validation_stalls(ds):
-    cfg = dataclasses.replace(FROZEN, lr=1e-6, lr_schedule="plateau", patience=4, min_epochs=6, max_epochs=6)
+    cfg = dataclasses.replace(FROZEN, lr=1e-6, lr_schedule="plateau", patience=4, min_epochs=6, epochs=6)
     lrs = [h["lr"] for h in train.fit(ds, cfg, progress=False).history]
     assert lrs[0] == cfg.lr and lrs[-1] < lrs[0] and all(b <= a for a, b in zip(lrs, lrs[1:]))
 
@@ -309,15 +320,15 @@ def test_clipping_bounds_the_gradient_each_step_sees(ds, monkeypatch):
         return step(self, *args, **kwargs)
 
     monkeypatch.setattr(torch.optim.Adam, "step", recording_step)
-    train.fit(ds, dataclasses.replace(TINY, dims="z", max_epochs=1, clip_norm=1e-3), progress=False)
+    train.fit(ds, dataclasses.replace(TINY, dims="z", epochs=1, clip_norm=1e-3), progress=False)
     assert norms and max(norms) <= 1e-3 * (1 + 1e-5)
     norms.clear()
-    train.fit(ds, dataclasses.replace(TINY, dims="z", max_epochs=1), progress=False)
+    train.fit(ds, dataclasses.replace(TINY, dims="z", epochs=1), progress=False)
     assert max(norms) > 1e-2  # unclipped, the gradients are far larger
 
 
 def test_a_diverged_run_says_so_and_keeps_finite_weights(ds, tmp_path):
-    cfg = dataclasses.replace(TINY, dims="z", lr=1e30, max_epochs=5, min_epochs=5)
+    cfg = dataclasses.replace(TINY, dims="z", lr=1e30, epochs=5, min_epochs=5)
     tm = train.fit(ds, cfg, progress=False)
     assert tm.diverged_epoch is not None and math.isnan(tm.history[-1]["train_loss"])
     assert all(torch.isfinite(v).all() for v in tm.net.state_dict().values())
@@ -325,11 +336,12 @@ def test_a_diverged_run_says_so_and_keeps_finite_weights(ds, tmp_path):
 
 
 def _as_old_format(folder, version: int) -> None:
-    """Rewrite a saved model directory as format 1, 2 or 3 wrote it: none of format 4's fields (``rotate``, ...);
-    before format 3 the std as the state dict's 'scale' and no 'inputs' field (and, for format 1, none of the
-    protocol fields)."""
+    """Rewrite a saved model directory as format 1, 2, 3 or 5 wrote it: the budget named ``max_epochs``; before
+    format 4 none of its fields (``rotate``, ...); before format 3 the std as the state dict's 'scale' and no
+    'inputs' field (and, for format 1, none of the protocol fields)."""
     cfg = json.loads((folder / "config.json").read_text())
-    for name in OLD_MEANING[3]:  # what format 4 added
+    cfg["max_epochs"] = cfg.pop("epochs")
+    for name in OLD_MEANING[3] if version <= 3 else ():  # what format 4 added
         del cfg[name]
     if version < 3:
         state = torch.load(folder / "weights.pt", weights_only=True)
@@ -344,10 +356,10 @@ def _as_old_format(folder, version: int) -> None:
     (folder / "meta.json").write_text(json.dumps({**meta, "format": f"study.model/{version}"}))
 
 
-@pytest.mark.parametrize("version", [1, 2, 3])
+@pytest.mark.parametrize("version", [1, 2, 3, 5])
 def test_an_old_format_model_reads_as_positions_with_its_old_meaning(tm, ds, tmp_path, version):
     folder = tm.save(tmp_path / "old")
-    assert json.loads((folder / "meta.json").read_text())["format"] == train.FORMAT == "study.model/5"
+    assert json.loads((folder / "meta.json").read_text())["format"] == train.FORMAT == "study.model/6"
     _as_old_format(folder, version)
     old = train.load(folder)
     assert old.config.inputs == "positions" and old.net.features.inputs == "positions"
@@ -355,6 +367,7 @@ def test_an_old_format_model_reads_as_positions_with_its_old_meaning(tm, ds, tmp
     np.testing.assert_array_equal(old.predict_proba(ds.test.x), tm.predict_proba(ds.test.x))
     if version == 1:
         assert (old.config.forget_bias, old.config.min_epochs, old.config.clip_norm) == (0.0, 0, 0.0)
+    assert old.config.epochs == tm.config.epochs, "saved as max_epochs before format 6"
 
 
 def test_a_model_that_lacks_a_field_of_its_format_is_refused(tm, tmp_path):
@@ -380,7 +393,7 @@ def test_a_classifier_built_directly_starts_with_the_papers_forget_bias():
 def test_a_velocity_model_trains_saves_reloads_and_streams(ds, tmp_path):
     from study.learn.stream import Streamer
 
-    cfg = dataclasses.replace(TINY, dims="z", inputs="velocity", max_epochs=2)
+    cfg = dataclasses.replace(TINY, dims="z", inputs="velocity", epochs=2)
     tm = train.fit(ds, cfg, progress=False, warn=False)
     assert tm.net.features.n_channels == 2 and tm.net.features.fps == ds.fps
     back = train.load(tm.save(tmp_path / "v"))
@@ -398,7 +411,7 @@ def test_a_velocity_model_trains_saves_reloads_and_streams(ds, tmp_path):
 def test_a_speed_model_trains_saves_reloads_and_streams_as_its_first_layer_reads(ds, tmp_path):
     from study.learn.stream import Streamer
 
-    cfg = dataclasses.replace(TINY, inputs="speed", max_epochs=2)
+    cfg = dataclasses.replace(TINY, inputs="speed", epochs=2)
     tm = train.fit(ds, cfg, progress=False, warn=False)
     assert tm.net.features.n_channels == 3
     back = train.load(tm.save(tmp_path / "s"))
@@ -442,7 +455,7 @@ def test_rotated_training_throws_are_turned_anew_every_epoch_and_seeded(ds):
 def test_fixed_observation_training_draws_anew_every_epoch_and_is_seeded(ds):
     """Frozen weights and no dropout: an epoch's training loss is the loss of the whole training part (up to the
     order of the sum), so it changes from epoch to epoch only if the positions do."""
-    cfg = dataclasses.replace(FROZEN, observe="fixed", observe_noise=0.05, dropout=0.0, max_epochs=3, patience=3)
+    cfg = dataclasses.replace(FROZEN, observe="fixed", observe_noise=0.05, dropout=0.0, epochs=3, patience=3)
     a = train.fit(ds, cfg, progress=False, warn=False)
     b = train.fit(ds, cfg, progress=False, warn=False)
     assert a.history == b.history, "seeded"
@@ -454,7 +467,7 @@ def test_fixed_observation_training_draws_anew_every_epoch_and_is_seeded(ds):
 
 
 def test_randomised_observation_training_sees_other_positions_than_exact(ds):
-    cfg = dataclasses.replace(FROZEN, observe="randomised", observe_noise=0.01, observe_drop=0.1, max_epochs=2)
+    cfg = dataclasses.replace(FROZEN, observe="randomised", observe_noise=0.01, observe_drop=0.1, epochs=2)
     tm = train.fit(ds, cfg, progress=False, warn=False)
     exact = train.fit(ds, dataclasses.replace(cfg, observe="exact"), progress=False, warn=False)
     again = train.fit(ds, cfg, progress=False, warn=False)
@@ -465,10 +478,19 @@ def test_randomised_observation_training_sees_other_positions_than_exact(ds):
         train.fit(ds, dataclasses.replace(cfg, observe="blurred"), progress=False)
 
 
+def test_any_camera_training_sees_heights_only_and_is_seeded(ds, tmp_path):
+    cfg = dataclasses.replace(FROZEN, dims="z", observe="any-camera", observe_noise=0.01, epochs=2)
+    tm = train.fit(ds, cfg, progress=False, warn=False)
+    randomised = train.fit(ds, dataclasses.replace(cfg, observe="randomised"), progress=False, warn=False)
+    assert tm.history == train.fit(ds, cfg, progress=False, warn=False).history, "seeded"
+    assert tm.history != randomised.history and np.isfinite(tm.history[-1]["val_loss"])
+    assert train.load(tm.save(tmp_path / "m")).config.observe == "any-camera"
+
+
 def test_a_network_trained_at_every_frame_answers_at_every_frame_and_streams(ds):
     from study.learn.stream import Streamer
 
-    cfg = dataclasses.replace(TINY, dims="z", loss_at="every", max_epochs=2)
+    cfg = dataclasses.replace(TINY, dims="z", loss_at="every", epochs=2)
     tm = train.fit(ds, cfg, progress=False)
     frames = tm.predict_proba_frames(ds.test.x)
     assert frames.shape == (len(ds.test.y), tm.n_frames, 2)
@@ -507,12 +529,12 @@ def test_a_failure_verdict_fits_its_evidence():
 
 
 def test_a_cosine_budget_warms_up_then_falls_to_its_floor():
-    cfg = TrainConfig(lr=2e-3, lr_schedule="cosine", warmup_epochs=4, max_epochs=24, lr_floor=0.05)
-    rates = [cfg.lr_at(e) for e in range(cfg.max_epochs)]
+    cfg = TrainConfig(lr=2e-3, lr_schedule="cosine", warmup_epochs=4, epochs=24, lr_floor=0.05)
+    rates = [cfg.lr_at(e) for e in range(cfg.epochs)]
     assert rates[:4] == pytest.approx([5e-4, 1e-3, 1.5e-3, 2e-3]), "linear warm-up to the rate"
     assert rates[-1] == pytest.approx(1e-4) and all(a >= b for a, b in zip(rates[4:], rates[5:])), "down to 5 %"
     assert not cfg.stops_early and TrainConfig().stops_early and TrainConfig().lr_at(3) is None
-    short = TrainConfig(lr=1e-3, lr_schedule="cosine", warmup_epochs=5, max_epochs=3, lr_floor=0.1)
+    short = TrainConfig(lr=1e-3, lr_schedule="cosine", warmup_epochs=5, epochs=3, lr_floor=0.1)
     assert [short.lr_at(e) for e in range(3)] == pytest.approx([5e-4, 1e-3, 1e-4]), "a short budget warms up less"
 
 
@@ -525,7 +547,7 @@ def test_recipe_fields_out_of_range_name_themselves(changes, field):
 
 @pytest.mark.slow  # two tiny runs
 def test_the_torch_lstm_trains_on_a_cosine_budget_and_keeps_its_average(smoke_dataset):
-    cfg = TrainConfig(cell="torch-lstm", length=1.0, max_epochs=3, truncation=10, lr_schedule="cosine",
+    cfg = TrainConfig(cell="torch-lstm", length=1.0, epochs=3, truncation=10, lr_schedule="cosine",
                       average="ema", ema_decay=0.5)
     tm = train.fit(smoke_dataset, cfg, warn=False)
     assert len(tm.history) == 3 and [h["lr"] for h in tm.history] == [cfg.lr_at(e) for e in range(3)]
@@ -556,3 +578,14 @@ def test_the_weights_average_warms_up_to_its_decay():
     assert cfg.ema_decay_at(0) == pytest.approx(0.1) and decays[-1] == cfg.ema_decay == 0.999
     assert all(a <= b for a, b in zip(decays, decays[1:])), "it only ever remembers longer"
     assert cfg.ema_decay_at(90) <= 0.91, "a run of a hundred steps is not held at its initial weights"
+
+
+def test_a_saved_model_folder_follows_the_umask(tm, tmp_path):
+    import os
+    old = os.umask(0o022)
+    try:
+        out = tm.save(tmp_path / "m")
+        assert out.stat().st_mode & 0o777 == 0o755  # 0o700 before: tempfile.mkdtemp's, whatever the umask
+        assert (out / "weights.pt").stat().st_mode & 0o777 == 0o644
+    finally:
+        os.umask(old)

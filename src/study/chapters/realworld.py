@@ -16,7 +16,7 @@ The pipeline, video by video:
 
 1. the tracker against the rendered ground truth (:func:`tracking_error`) and the scale it read off the
    object's apparent size (:func:`scale_error`);
-2. the model a camera in a car should use, chosen among four candidates on observed validation throws
+2. the model a camera in a car should use, chosen among six candidates (two inputs, three ways of training) on observed validation throws
    (:func:`recommend`);
 3. Table 1's Z model (and the recommended one, where it differs) on every video, per class with Wilson
    intervals beside the paper's 93 % and 100 % (``study.runs.paper.REAL_WORLD``), every candidate's
@@ -406,14 +406,16 @@ def candidates(runner: Runner, cfgs: dict[str, TrainConfig] | None = None,
                ob: observe.Observation | None = None) -> dict[str, TrainConfig]:
     """The Z models a camera could use: each of ``cfgs`` (name -> config; default: the paper's network reading
     positions at Table 1's point and reading positions and velocity at its own grid's point) trained on exact
-    positions and on random observations as the calibrated tracker (or ``ob``) would see them (names suffixed
-    ', exact' and ', randomised')."""
+    positions, on random observations as the calibrated tracker (or ``ob``) would see them, and on heights as a
+    user's own camera anywhere gives them (``study.simulate.observe.any_camera``; names suffixed ', exact',
+    ', randomised' and ', any-camera')."""
     cfgs = cfgs or {"positions": runner.table1_config(), "velocity": runner.table1_config("velocity")}
     out = {}
     for name, cfg in cfgs.items():
         z = dataclasses.replace(cfg, dims="z")
         out[f"{name}, exact"] = z
         out[f"{name}, randomised"] = calibration.randomised_config(runner, z, ob)
+        out[f"{name}, any-camera"] = dataclasses.replace(out[f"{name}, randomised"], observe="any-camera")
     return out
 
 

@@ -300,14 +300,14 @@ class Table1:
     patience: int
     ema_decay: float
     """Decay per step of the weights' average every run keeps."""
-    max_epochs: int
+    epochs: int
     n_grid_seeds: int
     n_seeds: int
     """Table 1's seeds on the first data set."""
     n_data: int
     """Data sets Table 1 is trained on."""
     first_patience: int
-    first_max_epochs: int
+    first_epochs: int
     grid_runs: int
     """Runs of every grid."""
     n_protocol_runs: int
@@ -602,7 +602,7 @@ def _grid_table(g: GridSearch, p: object) -> tuple[Table, int, int]:
 
 def _protocols(protocols: Runs) -> tuple[dict[ProtocolKey, dict[Dims, ProtocolRow]], Table, dict[str, object]]:
     val = {(s.keys["protocol"], s.keys["dims"]): s for s in stats.summarise(protocols, ("protocol", "dims"), "val_accuracy")}
-    epochs = {(s.keys["protocol"], s.keys["dims"]): s.mean for s in stats.summarise(protocols, ("protocol", "dims"), "epochs")}
+    epochs = {(s.keys["protocol"], s.keys["dims"]): s.mean for s in stats.summarise(protocols, ("protocol", "dims"), "epochs_run")}
     names = list(paper.PROTOCOLS)
     both: tuple[Dims, Dims] = ("xyz", "z")
     rows = [{"protocol": name, **{
@@ -718,7 +718,7 @@ def _schedule(choice: ScheduleChoice) -> tuple[dict[Schedule, ScheduleRow], Tabl
                                         "epoch-to-epoch change of the validation loss, second half of the epochs",
                                         unit="nats", per_seed=sw.tolist()))
         rows.append({"schedule": SCHEDULE_NAMES[k], "val": pct_pm(float(val.mean()), float(val.std(ddof=1)) if len(val) > 1 else 0.0),
-                     "swing": ", ".join(f"{x:.3f}" for x in sw), "epochs": float(np.mean(runs.values("epochs"))),
+                     "swing": ", ".join(f"{x:.3f}" for x in sw), "epochs": float(np.mean(runs.values("epochs_run"))),
                      "chosen": "✓" if k == choice.chosen else ""})
     table = Table(rows, {"schedule": "learning rate", "val": "validation accuracy, mean ± std",
                          "swing": "swing of the validation loss, each seed (nats)", "epochs": "epochs (mean)",
@@ -819,8 +819,8 @@ def compute(runner: Runner) -> Table1:
         ablation_table, baseline_table,
         n_params=sum(t.numel() for t in Classifier(3).parameters()), length_s=p.length,
         length_frames=round(p.length * ds.fps), n_train=len(ds.train), n_test=len(ds.test), min_epochs=p.min_epochs,
-        patience=p.patience, max_epochs=p.max_epochs, ema_decay=p.ema_decay, n_grid_seeds=len(p.grid_seeds), n_seeds=len(p.seeds),
-        n_data=len(p.data_seeds), first_patience=p.first_patience, first_max_epochs=p.first_max_epochs,
+        patience=p.patience, epochs=p.epochs, ema_decay=p.ema_decay, n_grid_seeds=len(p.grid_seeds), n_seeds=len(p.seeds),
+        n_data=len(p.data_seeds), first_patience=p.first_patience, first_epochs=p.first_epochs,
         grid_runs=grid_runs, lstm_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("peephole")),
         gru_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("gru")), defaults_moved=paper.differs_from_defaults(g.config, p),
         abl_diffs=abl_diffs, base_beats=beats, vel_xyz_accuracies=tuple(vel_xyz.accuracies().tolist()),

@@ -117,6 +117,15 @@ def array_checksum(arrays: Mapping[str, np.ndarray]) -> str:
     return h.hexdigest()
 
 
+def umask_mode(directory: bool = False) -> int:
+    """The permissions a plain ``open`` (or ``mkdir``) would give a new file (folder) under the process's umask:
+    ``0o666 & ~umask`` (``0o777`` for a folder). ``tempfile`` makes its files 600 and folders 700 whatever the
+    umask; what this module renames into place gets these instead, so a shared data folder stays shared."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return (0o777 if directory else 0o666) & ~mask
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success, fsync it and rename it onto ``path``.
@@ -137,6 +146,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         yield tmp
         with open(tmp, "rb+") as f:
             os.fsync(f.fileno())
+        os.chmod(tmp, umask_mode())
         os.replace(tmp, target)
     finally:
         tmp.unlink(missing_ok=True)

@@ -31,9 +31,9 @@ SIZES: dict[str, dict[str, dict[str, Any]]] = {
     "smoke": {
         "data": {"n_train": 8, "n_test": 8, "duration": 3.0},
         "runs": {"length": 1.0, "lrs": (3e-3,), "truncations": (10, 30), "grid_seeds": (0, 1), "seeds": (0, 1),
-                 "data_seeds": (0, 1), "lengths": (0.5, 1.0, 1.5), "length_seeds": (0, 1), "max_epochs": 3,
+                 "data_seeds": (0, 1), "lengths": (0.5, 1.0, 1.5), "length_seeds": (0, 1), "epochs": 3,
                  "patience": 2, "min_epochs": 2, "ema_decay": 0.5, "long_lengths": (1.5,), "protocol_seeds": (0,), "first_patience": 1,
-                 "first_max_epochs": 2, "shape_train": 4, "shape_test": 4, "certify_per_class": 8,
+                 "first_epochs": 2, "shape_train": 4, "shape_test": 4, "certify_per_class": 8,
                  "videos_per_class": 2, "real_clips": 2, "render_shadows": False},
     },
     # The paper's scale: 1000 + 1000 throws per class of 10 s; the grid is learning rate x truncation, 3 seeds a

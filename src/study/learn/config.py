@@ -26,16 +26,17 @@ ForgetInit = Literal["constant", "chrono"]
 """How the forget gates' biases start: all at ``forget_bias``, or chrono (Tallec & Ollivier 2018)."""
 Loss = Literal["last", "every"]
 """Where the loss is taken: at the last frame only (the paper's), or at every frame."""
-Observe = Literal["exact", "randomised", "fixed"]
-"""What a network is trained on: the simulator's positions, positions as a random camera observes them, or
-positions observed with a fixed tracker error (a fresh draw every epoch)."""
+Observe = Literal["exact", "randomised", "fixed", "any-camera"]
+"""What a network is trained on: the simulator's positions, positions as a random camera observes them,
+positions observed with a fixed tracker error (a fresh draw every epoch), or heights as a user's own camera,
+anywhere, and ``study classify``'s one scale give them."""
 Inputs = Literal["positions", "velocity", "speed"]
 """What the network reads of the positions it is given: the positions (the paper's); the positions and their
 frame-to-frame velocity; or what of them does not depend on the throw's heading, the height, its velocity and the
 horizontal speed (``study.learn.model.Features``)."""
 Schedule = Literal["constant", "plateau", "cosine"]
 """Learning-rate schedules: fixed; halved when the validation loss stalls for ``patience // 4`` epochs; or a fixed
-budget of ``max_epochs``, a linear warm-up over ``warmup_epochs`` then a cosine decay to ``lr_floor`` of the rate
+budget of ``epochs``, a linear warm-up over ``warmup_epochs`` then a cosine decay to ``lr_floor`` of the rate
 (no early stopping: a run trains its whole budget and keeps its best validation epoch)."""
 Average = Literal["none", "ema"]
 """Which weights are validated and kept: the optimiser's own, or their exponential moving average over steps."""
@@ -52,7 +53,13 @@ INPUTS: tuple[Inputs, ...] = get_args(Inputs)
 class TrainConfig:
     """Everything that determines a trained model, besides the data. The defaults are the study's protocol,
     Table 1's configuration on the paper preset (the grid's winner there), so a model trained with them
-    trains."""
+    trains.
+
+    Example::
+
+        cfg = study.TrainConfig(dims="z", inputs="velocity", length=2.0, epochs=40)
+        model = study.fit(ds, cfg)
+    """
 
     dims: Dims = "z"
     """Input dimensions: 'z' (the height only: what one camera gives) or 'xyz' (all three coordinates)."""
@@ -70,13 +77,13 @@ class TrainConfig:
     """Trajectories per gradient step."""
     truncation: int = 90
     """Truncated-BPTT length in frames: the loss back-propagates through at most this many last frames."""
-    max_epochs: int = 150
+    epochs: int = 150
     """Upper bound on passes over the training split."""
     patience: int = 20
     """Stop after this many epochs without a lower validation loss; the best epoch's weights are kept."""
     min_epochs: int = 30
     """Early stopping cannot stop a run before this many epochs (so it cannot fire on the initial plateau);
-    ``max_epochs`` still ends it."""
+    ``epochs`` still ends it."""
     forget_bias: float = 1.0
     """Added to the forget gates' biases at initialisation (TensorFlow's LSTMCell default, which the paper
     used); the GRU, which has no forget gate, ignores it."""
@@ -87,11 +94,11 @@ class TrainConfig:
     """Clip the gradient's global norm to this before each step; 0: no clipping."""
     lr_schedule: Schedule = "constant"
     """'constant'; 'plateau': halve the learning rate when the validation loss has not improved for a quarter of
-    ``patience`` epochs; or 'cosine': ``max_epochs`` epochs whatever happens (no early stopping), the rate rising
+    ``patience`` epochs; or 'cosine': ``epochs`` epochs whatever happens (no early stopping), the rate rising
     linearly over ``warmup_epochs`` and then falling along a half cosine to ``lr_floor`` of itself."""
     warmup_epochs: int = 0
     """With 'cosine': epochs of linear warm-up, the rate rising from ``lr / warmup_epochs`` to ``lr`` (at most
-    ``max_epochs - 1``: a short budget warms up for less)."""
+    ``epochs - 1``: a short budget warms up for less)."""
     lr_floor: float = 0.01
     """With 'cosine': the last epoch's rate over ``lr``."""
     average: Average = "ema"
@@ -108,6 +115,8 @@ class TrainConfig:
     observe: Observe = "exact"
     """What the network is trained on: 'exact' positions; 'randomised' observations (each epoch sees the
     training split through a camera and tracker drawn at random, ``study.simulate.observe.randomised``); or
+    'any-camera' (the training and validation splits filmed by cameras drawn as the camera sweep's and read by one
+    scale, ``study.simulate.observe.any_camera``); or
     'fixed', the training split observed with the tracker's error (``observe_noise`` and the fields after it, the
     model ``study.simulate.observe.TrackerNoise``) and ``observe_drop``, drawn afresh every epoch (the validation
     split observed the same way, once)."""
@@ -139,13 +148,19 @@ class TrainConfig:
     """Augmentation, degrees: every epoch turns each training throw about the vertical through the origin by its
     own angle, uniform in [-rotate, rotate] (180: any heading); 0: none. Needs dims 'xyz'."""
 
+    def __post_init__(self) -> None:
+        self.check()  # a config that exists is one that trains: refused where it is made, not at fit
+
     def check(self) -> None:
         """Raise :class:`ConfigError` naming the first field that is out of range or not one of its choices."""
         for name, allowed in choices(TrainConfig).items():
-            if getattr(self, name) not in allowed:
-                raise ConfigError(f"TrainConfig.{name} = {getattr(self, name)!r} is unknown; use one of {allowed}")
+            value = getattr(self, name)
+            if value not in allowed:
+                near = [a for a in allowed if isinstance(value, str) and a.lower() == value.lower()]
+                hint = f"use {near[0]!r} (lower case)" if near else f"use one of {', '.join(map(repr, allowed))}"
+                raise ConfigError(f"TrainConfig.{name} = {value!r} is unknown; {hint}")
         check_range("TrainConfig.length (seconds)", self.length, 0, lo_open=True)
-        for name in ("hidden", "layers", "batch_size", "truncation", "max_epochs", "patience"):
+        for name in ("hidden", "layers", "batch_size", "truncation", "epochs", "patience"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ConfigError(f"TrainConfig.{name} = {value!r}; it must be a whole number >= 1")
@@ -172,7 +187,7 @@ class TrainConfig:
 
     @property
     def stops_early(self) -> bool:
-        """Whether a run may stop before ``max_epochs`` (``patience``): not on a cosine budget."""
+        """Whether a run may stop before ``epochs`` (``patience``): not on a cosine budget."""
         return self.lr_schedule != "cosine"
 
     def lr_at(self, epoch: int) -> float | None:
@@ -180,10 +195,10 @@ class TrainConfig:
         ('constant', 'plateau')."""
         if self.lr_schedule != "cosine":
             return None
-        warm = min(self.warmup_epochs, self.max_epochs - 1)
+        warm = min(self.warmup_epochs, self.epochs - 1)
         if epoch < warm:
             return self.lr * (epoch + 1) / warm
-        span = self.max_epochs - warm - 1  # epochs after the first of the decay
+        span = self.epochs - warm - 1  # epochs after the first of the decay
         progress = 1.0 if span <= 0 else min(1.0, (epoch - warm) / span)
         return self.lr * (self.lr_floor + (1 - self.lr_floor) * 0.5 * (1 + math.cos(math.pi * progress)))
 
@@ -226,6 +241,9 @@ WHITE: dict[str, object] = {"observe_offset": 0.0, "observe_rho": 0.0, "observe_
 
 NO_RECIPE: dict[str, object] = {"warmup_epochs": 0, "lr_floor": 0.01, "average": "none", "ema_decay": 0.999}
 """The recipe fields at what every model saved before format 5 was trained with: no warm-up, no averaging."""
+
+RENAMED: dict[str, str] = {"max_epochs": "epochs"}
+"""Fields saved under another name before model format 6: old name -> today's."""
 
 OLD_MEANING: dict[int, dict[str, object]] = {
     1: {"min_epochs": 0, "forget_bias": 0.0, "forget_init": "constant", "clip_norm": 0.0, "lr_schedule": "constant",

@@ -87,7 +87,7 @@ def epoch_inputs(x: np.ndarray, tr: np.ndarray, va: np.ndarray, cfg: TrainConfig
             fps: float) -> tuple[Callable[[int], torch.Tensor], np.ndarray]:
     """The training part's positions for each epoch (a function of the epoch) and the validation part's, from
     the first frames ``x`` (n, T, 3): exact positions; (``'randomised'``) observed by a random camera, eight
-    views cycled; or (``'fixed'``) observed with the config's tracker error, drawn afresh every epoch. With
+    views cycled; (``'any-camera'``) filmed by cameras anywhere and read by one scale, eight views cycled; or (``'fixed'``) observed with the config's tracker error, drawn afresh every epoch. With
     ``cfg.rotate``, each epoch's training positions, once observed, are turned about the vertical
     (:func:`rotating`); the validation part is left as it was thrown."""
     view, x_val = _observed_inputs(x, tr, va, cfg, fps)
@@ -116,6 +116,11 @@ def _observed_inputs(x: np.ndarray, tr: np.ndarray, va: np.ndarray, cfg: TrainCo
             return drawn[epoch]
 
         return view, x_val
+    if cfg.observe == "any-camera":
+        rng = np.random.default_rng([cfg.seed, 2019])
+        ranges = observe.AnyCameraRanges(noise=(0.0, 3 * cfg.observe_noise))
+        views = [torch.from_numpy(inputs(observe.any_camera(x[tr], fps, rng, ranges))) for _ in range(OBSERVED_VIEWS)]
+        return lambda epoch: views[epoch % len(views)], inputs(observe.any_camera(x[va], fps, rng, ranges))
     rng = np.random.default_rng([cfg.seed, 2016])
     ranges = observe.Randomisation(noise=(0.0, 3 * cfg.observe_noise))
     views = [torch.from_numpy(inputs(observe.randomised(x[tr], fps, rng, ranges))) for _ in range(OBSERVED_VIEWS)]

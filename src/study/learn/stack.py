@@ -362,8 +362,8 @@ def _train(runs: Sequence[tuple[Dataset, TrainConfig]], sh: Shape, dev: torch.de
         members = [_member(ds, cfg, dev) for ds, cfg in runs]
         layout = Layout.of(members[0].net)
         stats = {id(m): (m.net.features.mean, m.net.features.std) for m in members}
-        for epoch in range(max(m.cfg.max_epochs for m in members)):
-            active = [m for m in members if not m.done and epoch < m.cfg.max_epochs]  # the stack shrinks
+        for epoch in range(max(m.cfg.epochs for m in members)):
+            active = [m for m in members if not m.done and epoch < m.cfg.epochs]  # the stack shrinks
             if not active:
                 break
             _epoch(active, layout, sh, stats, epoch)

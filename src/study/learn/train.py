@@ -69,13 +69,19 @@ def fit(dataset: Dataset, cfg: TrainConfig, progress: bool = True, warn: bool = 
     A run that failed to train (``TrainedModel.failed``), or whose validation part is too small to tell, says so
     with a :class:`TrainingFailedWarning` naming what to change, unless ``warn`` is False (the experiments count
     such runs instead). ``device``: where a stacked cell trains (``"cuda"`` on a GPU); ``nn.LSTM`` trains on the
-    CPU."""
+    CPU.
+
+    Example::
+
+        model = study.fit(ds, study.TrainConfig(length=1.0, epochs=5))   # one process, no pool
+        model.save("my-model")
+    """
     cfg.check()
     if len(dataset.train.y) < 2:
         raise TrajectoryError(f"training split has {len(dataset.train.y)} trajectories; need at least 2")
     select_inputs(dataset.train.x, cfg.dims, cfg.n_frames(dataset.fps), what="training split")  # a clear error
     if cfg.cell in stack.STACKABLE:
-        bar = tqdm(total=cfg.max_epochs, desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
+        bar = tqdm(total=cfg.epochs, desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
         with bar:
             tm = stack.train([(dataset, cfg)], device, on_epoch=lambda i, c: bar.update())
         tm = tm[0]
@@ -113,7 +119,13 @@ def _loss_and_accuracy(net: Classifier, x: torch.Tensor, y: torch.Tensor, batch:
 
 
 def evaluate(tm: TrainedModel, split: Split) -> dict[str, Any]:
-    """Score ``tm`` on ``split`` (normally the test split): see :func:`metrics`."""
+    """Score ``tm`` on ``split`` (normally the test split): see :func:`metrics`.
+
+    Example::
+
+        res = study.evaluate(model, ds.test)
+        print(res["accuracy"], res["per_class_accuracy"])
+    """
     pred = tm.predict_proba(split.x).argmax(axis=1)
     return metrics(split.y, pred)
 
@@ -159,7 +171,7 @@ def _fit_alone(dataset: Dataset, cfg: TrainConfig, progress: bool) -> TrainedMod
         history: list[dict[str, float]] = []
         best_loss, best_epoch, best_state = math.inf, 0, copy.deepcopy(net.state_dict())
         diverged: int | None = None
-        bar = tqdm(range(cfg.max_epochs), desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
+        bar = tqdm(range(cfg.epochs), desc=f"train {cfg.cell} {cfg.dims} {cfg.length:g}s", disable=not progress)
         params = list(net.parameters())
         ema = [p.detach().clone() for p in params] if cfg.average == "ema" else None
         steps = 0  # optimiser steps so far

@@ -25,24 +25,27 @@ import torch.nn.functional as F
 
 from study import CLASSES
 from study.core.errors import ConfigError, ModelError, output_error
+from study.core.cache import umask_mode
 from study.learn import native
-from study.learn.config import DIMS, OLD_MEANING, TrainConfig, select_inputs
+from study.learn.config import DIMS, OLD_MEANING, RENAMED, TrainConfig, select_inputs
 from study.learn.metrics import PLATEAU_LOSS, training_state
 from study.learn.model import Classifier
 
 THREADS = 1
 """CPU threads used by :func:`fit` (see the module docstring)."""
 
-FORMATS = {"study.model/1": 1, "study.model/2": 2, "study.model/3": 3, "study.model/4": 4, "study.model/5": 5}
+FORMATS = {"study.model/1": 1, "study.model/2": 2, "study.model/3": 3, "study.model/4": 4, "study.model/5": 5,
+           "study.model/6": 6}
 """Every model format this code reads. Format 2 added the training fields min_epochs, forget_bias,
 forget_init, clip_norm, lr_schedule and the record of a diverged run; format 3 the input representation
 (``TrainConfig.inputs``: the classifier's first layer, with a mean and a standard deviation per channel);
 format 4 the rotation of the training throws (``TrainConfig.rotate``) and the input ``'speed'``, which a
 format-3 reader cannot build; format 5 the training recipe's warm-up, cosine budget and weight averaging
-(``TrainConfig.warmup_epochs``, ``lr_floor``, ``average``, ``ema_decay``). An older directory is read with the
+(``TrainConfig.warmup_epochs``, ``lr_floor``, ``average``, ``ema_decay``); format 6 names the epoch budget
+``epochs`` (``max_epochs`` before, ``RENAMED``). An older directory is read with the
 later fields' old meaning (``OLD_MEANING``): positions, divided by their standard deviation; no rotation; no
 warm-up or averaging."""
-FORMAT = "study.model/5"
+FORMAT = "study.model/6"
 FILES = ("weights.pt", "config.json", "normalisation.json", "history.json", "meta.json")
 """What a saved model directory holds."""
 
@@ -69,7 +72,13 @@ def frame_logits(net: Classifier, x: torch.Tensor) -> torch.Tensor:
 
 @dataclass
 class TrainedModel:
-    """A trained classifier with everything needed to use it and to know where it came from."""
+    """A trained classifier with everything needed to use it and to know where it came from.
+
+    Example::
+
+        model = study.fit(ds, study.TrainConfig(length=1.0, epochs=5))
+        print(model.best_epoch, model.failed, model.predict_proba(ds.test.x[:3]))
+    """
 
     net: Classifier
     config: TrainConfig
@@ -190,6 +199,7 @@ class TrainedModel:
             }
             for name, obj in texts.items():
                 (tmp / name).write_text(json.dumps(obj, indent=1) + "\n")
+            os.chmod(tmp, umask_mode(directory=True))
             if out.exists():
                 old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old.", dir=out.parent))
                 os.replace(out, old / "m")
@@ -205,7 +215,13 @@ class TrainedModel:
 @dataclass(frozen=True)
 class Ensemble:
     """Several trained models of one input (seeds of one config) used as one classifier: the mean of their
-    probabilities. A number it gives does not hang on which seed's weights one happened to keep."""
+    probabilities. A number it gives does not hang on which seed's weights one happened to keep.
+
+    Example::
+
+        seeds = [study.load(d) for d in ("m0", "m1", "m2")]
+        p = study.Ensemble(tuple(seeds)).predict_proba(ds.test.x)
+    """
 
     members: tuple[TrainedModel, ...]
     """The models, every one reading the same dims, frames and frame rate."""
@@ -246,9 +262,18 @@ def _read_json(path: Path) -> Any:
 
 
 def load(model_dir: str | Path) -> TrainedModel:
-    """Read a directory written by :meth:`TrainedModel.save`, checking that every file is there and agrees."""
+    """Read a directory written by :meth:`TrainedModel.save`, checking that every file is there and agrees.
+
+    Example::
+
+        model = study.load("my-model")
+        p = model.predict_proba(ds.test.x)      # (n, 2): p_light, p_heavy
+    """
     d = Path(model_dir)
     hint = "retrain it with `study train ... --out DIR`"
+    if d.is_file():
+        raise ModelError(f"model {d} is a file; give the model's directory (the folder `study train --out DIR` "
+                         "wrote, with weights.pt and config.json inside)")
     if not d.is_dir():
         raise ModelError(f"model directory {d}: no such directory; {hint}")
     for name in FILES:
@@ -259,6 +284,8 @@ def load(model_dir: str | Path) -> TrainedModel:
     if version is None:
         raise ModelError(f"model directory {d}: format {meta.get('format')!r}, expected {FORMAT!r}; {hint}")
     fields = _read_json(d / "config.json")
+    if version < 6 and isinstance(fields, dict):
+        fields = {RENAMED.get(k, k): v for k, v in fields.items()}
     if version in OLD_MEANING and isinstance(fields, dict):
         fields = {**OLD_MEANING[version], **fields}  # trained before these fields existed: what it was trained with
     missing = {f.name for f in dataclasses.fields(TrainConfig)} - set(fields if isinstance(fields, dict) else ())

@@ -13,8 +13,9 @@ Class = Literal["light", "heavy"]
 """The study's classes (``study.CLASSES``)."""
 
 
-Training = Literal["exact", "randomised"]
-"""How a candidate was trained: on exact positions, or on random observations."""
+Training = Literal["exact", "randomised", "any-camera"]
+"""How a candidate was trained: on exact positions, on random observations, or on heights as a user's own camera
+gives them."""
 
 
 ModelKey = Literal["table1", "recommended"]

@@ -90,7 +90,7 @@ def grid_points(runs: Runs) -> list[GridPoint]:
         acc = g.val_accuracies()
         out.append(GridPoint(g[0].config, len(g), float(acc.mean()), float(acc.std(ddof=1)) if len(g) > 1 else 0.0,
                              float(np.mean(g.values("val_loss"))), g.n_failed,
-                             sum(d is not None for d in g.values("diverged_epoch")), float(np.mean(g.values("epochs")))))
+                             sum(d is not None for d in g.values("diverged_epoch")), float(np.mean(g.values("epochs_run")))))
     return out
 
 
@@ -130,8 +130,8 @@ def protocol_changes(p: Preset) -> dict[str, dict[str, Any]]:
     """Each protocol of :data:`PROTOCOLS` as the config fields it changes from the study's protocol: each
     row adds one change to the row above it, up to the study's own (:data:`STUDY_PROTOCOL`); the last
     row adds one more that the study does not keep. The first protocol stopped early as the preset's
-    ``first_patience`` and ``first_max_epochs`` say."""
-    first = {"min_epochs": 0, "max_epochs": p.first_max_epochs, "patience": p.first_patience}
+    ``first_patience`` and ``first_epochs`` say."""
+    first = {"min_epochs": 0, "epochs": p.first_epochs, "patience": p.first_patience}
     raw = {"average": "none"}  # the optimiser's own weights, validated and kept
     changes = [{"forget_bias": 0.0, "clip_norm": 0.0, **raw, **first}, {"clip_norm": 0.0, **raw, **first},
                {"clip_norm": 0.0, **raw}, raw, {}, {"lr_schedule": "plateau"}]

@@ -47,7 +47,7 @@ class Preset:
     """Grid: dropout probabilities (0.2 = the paper's keep-probability 0.8)."""
     batch_sizes: tuple[int, ...] = (_PROTOCOL.batch_size,)
     """Grid: trajectories per step."""
-    max_epochs: int = _PROTOCOL.max_epochs
+    epochs: int = _PROTOCOL.epochs
     """Epoch cap of every run."""
     patience: int = _PROTOCOL.patience
     """Early-stopping patience of every run, epochs."""
@@ -69,7 +69,7 @@ class Preset:
     """Seeds of the training-protocol comparison (validation only)."""
     first_patience: int = 10
     """Early-stopping patience of the study's first protocol (the comparison's first row), epochs."""
-    first_max_epochs: int = 60
+    first_epochs: int = 60
     """Epoch cap of the study's first protocol."""
     shape_train: int = 250
     """Training throws per class and shape in the cue chapter's mixed-shape training set."""
@@ -94,7 +94,7 @@ class Preset:
         """The config every run starts from, before the grid values are set: the study's protocol, cut to
         this preset's epochs."""
         return dataclasses.replace(_PROTOCOL, dims=self.ablation_dims, length=self.length,
-                                   max_epochs=self.max_epochs, patience=self.patience, min_epochs=self.min_epochs,
+                                   epochs=self.epochs, patience=self.patience, min_epochs=self.min_epochs,
                                    ema_decay=self.ema_decay)
 
     def grid_lrs(self, cell: Cell) -> tuple[float, ...]:

@@ -37,7 +37,14 @@ T = TypeVar("T")
 
 @dataclass(frozen=True)
 class Runner:
-    """The study's experiments on one dataset, with where and how their runs are trained."""
+    """The study's experiments on one dataset, with where and how their runs are trained.
+
+    Example::
+
+        if __name__ == "__main__":                    # its runs train in worker processes
+            runner = study.Runner.open("smoke", data_seed=0)
+            rows = runner.seed_runs(runner.table1_config())
+    """
 
     dataset: Dataset
     """The dataset every experiment trains on (``study.simulate.synth.dataset``)."""

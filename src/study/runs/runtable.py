@@ -36,8 +36,8 @@ class Run:
     """Validation accuracy at the kept epoch."""
     val_loss: float
     """Validation loss at the kept epoch, nats."""
-    epochs: int
-    """Epochs run."""
+    epochs_run: int
+    """Epochs run (at most ``config.epochs``)."""
     best_epoch: int
     """The kept epoch (0-based)."""
     seconds: float
@@ -76,7 +76,7 @@ class Run:
     @property
     def capped(self) -> bool:
         """Stopped by the epoch cap, not by early stopping (nor by diverging)."""
-        return self.epochs >= self.config.max_epochs and self.diverged_epoch is None
+        return self.epochs_run >= self.config.epochs and self.diverged_epoch is None
 
     def get(self, name: str) -> Any:
         """A field by name: a label, else a config field, else the run's own."""

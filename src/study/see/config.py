@@ -33,7 +33,13 @@ CENTROIDS = ("weighted", "binary")
 
 @dataclass
 class TrackConfig:
-    """How the colour tracker finds the object."""
+    """How the colour tracker finds the object.
+
+    Example::
+
+        cfg = study.TrackConfig(color="orange", max_gap=4)
+        traj = study.track_video("throw.mp4", cfg)
+    """
 
     color: str = "tennis"
     """Name of a colour in :data:`COLORS` (ignored when ``hsv`` is given)."""

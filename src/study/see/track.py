@@ -55,7 +55,14 @@ def track_video(
     and the object's depth, no scale assumed), above ``rest_height``; else from one scale
     (``study.see.gaps.set_scale``): ``metres_per_pixel``; or read off the blob of an object of ``shape``
     (``study.see.scale.read_scale``, at rest, as its mean over the video or by gravity, as ``scale_from`` says); or
-    ``object_size`` (a ball's diameter, metres) over the blob's size at rest."""
+    ``object_size`` (a ball's diameter, metres) over the blob's size at rest.
+
+    Example::
+
+        from study.answer import shape
+        traj = study.track_video("throw.mp4", study.TrackConfig(color="tennis"), shape=shape(0.067))
+        print(traj.t[-1], traj.height[:5])  # seconds; metres above the ground
+    """
     cfg = cfg or TrackConfig()
     traj = fill_gaps(detect_all(path, cfg), cfg.max_gap)
     if cfg.smooth:

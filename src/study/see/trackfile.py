@@ -33,7 +33,13 @@ def write_csv(traj: Trajectory, path: str | Path) -> Path:
 
 
 def read_csv(path: str | Path) -> Trajectory:
-    """Read a trajectory written by :func:`write_csv` (heights keep their units); raise :class:`TrajectoryError` if malformed."""
+    """Read a trajectory written by :func:`write_csv` (heights keep their units); raise :class:`TrajectoryError` if malformed.
+
+    Example::
+
+        traj = study.read_csv("throw.csv")         # written by `study track --out`
+        print(traj.units, len(traj.t))
+    """
     p = check_file(path, "trajectory CSV", "write one with 'study track VIDEO --out FILE.csv'")
     try:
         with p.open(newline="") as f:

@@ -46,7 +46,15 @@ def max_sleep_tolerance(timestep: float) -> float:
 @dataclass(frozen=True)
 class ClassPrior:
     """Prior over one class's physical parameters: each a ``(low, high)`` range, sampled uniformly
-    (mass log-uniformly). Sources for the ranges are given in the book's data chapter."""
+    (mass log-uniformly). Sources for the ranges are given in the book's data chapter.
+
+    Example::
+
+        import dataclasses
+        cfg = study.SynthConfig.preset("smoke")
+        lighter = dataclasses.replace(cfg.light, mass=(0.05, 0.2))   # kg
+        ds = study.dataset(cfg.replace(light=lighter), seed=0)
+    """
 
     mass: tuple[float, float]
     """kg, log-uniform."""
@@ -99,7 +107,13 @@ class LaunchPrior:
 
 @dataclass(frozen=True)
 class SynthConfig:
-    """Everything that determines a dataset, with the seed. Build one with :meth:`preset`."""
+    """Everything that determines a dataset, with the seed. Build one with :meth:`preset`.
+
+    Example::
+
+        cfg = study.SynthConfig.preset("smoke").replace(duration=2.0)
+        ds = study.dataset(cfg, seed=1)
+    """
 
     n_train: int = 1000
     """Training trajectories per class."""

@@ -25,7 +25,13 @@ SPLITS = ("train", "test")
 
 @dataclass(frozen=True)
 class Split:
-    """One split of the dataset: ``n`` trajectories of ``T`` frames."""
+    """One split of the dataset: ``n`` trajectories of ``T`` frames.
+
+    Example::
+
+        mine = study.Split(x=positions, y=labels)          # (n, T, 3) metres, (n,) 0/1
+        ds = study.Dataset(train=mine, test=held_out, fps=30.0)
+    """
 
     x: np.ndarray
     """(n, T, 3) float32, metres: world x, y, z of the object's centre; z is height above the ground."""
@@ -40,7 +46,13 @@ class Split:
 
 @dataclass(frozen=True)
 class Dataset:
-    """Train and test splits sampled at ``fps`` frames per second, with their provenance."""
+    """Train and test splits sampled at ``fps`` frames per second, with their provenance.
+
+    Example::
+
+        ds = study.load_dataset("data/synth-<key>.npz")
+        print(ds.fps, ds.train.x.shape, ds.test.y.mean())
+    """
 
     train: Split
     test: Split
@@ -85,7 +97,12 @@ def _arrays(ds: Dataset) -> dict[str, np.ndarray]:
 
 
 def save(ds: Dataset, path: str | Path) -> Path:
-    """Write ``ds`` to ``path`` atomically (temp file, fsync, rename) and return the path."""
+    """Write ``ds`` to ``path`` atomically (temp file, fsync, rename) and return the path.
+
+    Example::
+
+        study.save_dataset(study.Dataset(train=mine, test=held_out, fps=30.0), "my-throws.npz")
+    """
     arrays = _arrays(ds)
     meta = dict(ds.meta, format=FORMAT, fps=ds.fps, classes=list(CLASSES), checksum=array_checksum(arrays))
     path = Path(path)
@@ -95,14 +112,32 @@ def save(ds: Dataset, path: str | Path) -> Path:
     return path
 
 
+def _is_text(p: Path) -> bool:
+    """Whether the file's first bytes read as UTF-8 text (a CSV, say), for the error that says what it is."""
+    with open(p, "rb") as f:
+        head = f.read(512)
+    try:
+        head.decode("utf-8")
+    except UnicodeDecodeError:
+        return False
+    return True
+
+
 def load(path: str | Path) -> Dataset:
     """Read and validate a dataset file written by :func:`save`.
 
     Raises :class:`DataError` if the file is missing, empty, not a dataset, truncated, or if any array
     does not match the checksum in its header.
+    Example::
+
+        ds = study.load_dataset("my-throws.npz")
     """
-    hint = "regenerate it with `study synth` (or delete it and rebuild)"
+    hint = (f"write it again with `study synth --out {path}` (a cache in the data folder: delete it, the build makes it "
+            "again; trajectories of your own: `study.simulate.data.save`)")
     p = check_file(path, "dataset", hint)
+    if not zipfile.is_zipfile(p) and _is_text(p):
+        raise DataError(f"dataset {p}: a text file, not a data set (a .npz archive written by `study synth` or "
+                        "`study.simulate.data.save`); a trajectory CSV is read by `study classify CSV`")
     try:
         with np.load(p, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}

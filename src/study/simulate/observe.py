@@ -18,7 +18,9 @@ given instead, in the same shape and units, seeded by the ``rng`` it is handed:
 - :func:`height_scale`: an unknown error in that scale.
 
 :class:`Observation` composes them; :func:`randomised` draws one per trajectory (for training a
-classifier that expects observed positions).
+classifier that expects observed positions). :func:`any_camera` draws what a user's own camera gives instead: a
+camera anywhere (:class:`AnyCamera`) and heights read from the image by one scale, the object's mean apparent size
+(:func:`filmed`), as ``study classify VIDEO --object-size D`` reads them.
 """
 
 from __future__ import annotations
@@ -432,4 +434,109 @@ def randomised(x: np.ndarray, fps: float, rng: np.random.Generator, ranges: Rand
             height_factor=float(np.exp(rng.uniform(*np.log(ranges.height_factor)))),
         )
         out[i] = ob.apply(x[i : i + 1], fps, rng, rest_height=rest_height)[0]
+    return out
+
+
+@dataclass(frozen=True)
+class AnyCamera:
+    """A pinhole camera set up by a user, not aimed across the throw: for :func:`filmed`. It stands ``distance`` from
+    the middle of the throw's path (horizontally), ``height`` above the floor, turned ``yaw`` away from square-on
+    and tilted ``tilt`` down, as the camera sweep's clips are filmed (``study.methods.sweep.camera``)."""
+
+    height: float = 1.0
+    """Camera height above the floor, metres."""
+    tilt: float = 10.0
+    """Degrees below the horizon."""
+    yaw: float = 0.0
+    """Degrees away from square-on to the throw (either sign)."""
+    distance: float = 4.0
+    """Horizontal metres from the middle of the throw's path."""
+
+    def validate(self) -> None:
+        check_range("AnyCamera.height (metres)", self.height, 0.0, 100.0, lo_open=True)
+        check_range("AnyCamera.tilt (degrees)", self.tilt, -80.0, 80.0)
+        check_range("AnyCamera.yaw (degrees)", self.yaw, -89.0, 89.0)
+        check_range("AnyCamera.distance (metres)", self.distance, 0.5, 1000.0)
+
+
+def _frame(camera: AnyCamera, mid: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The camera's eye (3,), forward (3,) and image-up (3,) unit vectors for a throw whose path's middle is ``mid``."""
+    h, t = math.radians(90.0 + camera.yaw), math.radians(camera.tilt)  # square-on: looking along +y
+    forward = np.array([math.cos(t) * math.cos(h), math.cos(t) * math.sin(h), -math.sin(t)])
+    right = np.array([math.sin(h), -math.cos(h), 0.0])
+    eye = np.array([mid[0] - camera.distance * math.cos(h), mid[1] - camera.distance * math.sin(h), camera.height])
+    return eye, forward, np.cross(right, forward)
+
+
+def filmed(x: np.ndarray, camera: AnyCamera, size_factor: float = 1.0,
+           rest_height: float = REST_HEIGHT) -> np.ndarray | None:
+    """The heights a user's path reads from a video of throw ``x`` (T, 3) metres filmed by ``camera``: (T, 3) with
+    x = y = 0 and z from the image row; None where the object passes within 0.3 m of the camera's plane.
+
+    The throw is first turned to cross the world's x axis (:func:`turned_across_view`), as the sweep's throws are.
+    Each centre is projected; the ground is the lowest row the centre reaches; the scale, metres per pixel, is the
+    object's size over its root-mean-square apparent size (``f size / depth``) over the frames, times
+    ``size_factor`` (an error in the blob's measured size): ``study.see.scale.read_scale`` with ``how='mean'``.
+    The focal length cancels, so the field of view and the frame size do not matter here."""
+    camera.validate()
+    x = turned_across_view(_check(x[None]))[0]
+    eye, forward, up = _frame(camera, x.mean(axis=0))
+    rel = x - eye  # (T, 3)
+    depth = rel @ forward  # (T,)
+    if (depth <= 0.3).any():
+        return None
+    v = -(rel @ up) / depth  # image row over the focal length, down positive
+    scale = size_factor / math.sqrt(float(np.mean(depth**-2.0)))  # metres per (pixel over focal length)
+    out = np.zeros_like(x)
+    out[:, Z] = (v.max() - v) * scale + rest_height
+    return out
+
+
+@dataclass(frozen=True)
+class AnyCameraRanges:
+    """Ranges from which :func:`any_camera` draws each throw's camera and tracker (uniform unless stated): the camera
+    sweep's (``study.methods.sweep.FAMILIES``), all families together."""
+
+    height: tuple[float, float] = (0.3, 2.0)
+    """Camera height, metres."""
+    tilt: tuple[float, float] = (0.0, 45.0)
+    """Tilt below the horizon, degrees."""
+    yaw: tuple[float, float] = (-60.0, 60.0)
+    """Yaw from square-on, degrees."""
+    distance: tuple[float, float] = (2.0, 8.0)
+    """Horizontal distance, metres."""
+    size_factor: tuple[float, float] = (0.9, 1.1)
+    """Error of the blob's measured size, log-uniform (one frame's is about 7.5 % off; the mean over a video less)."""
+    noise: tuple[float, float] = (0.0, 0.03)
+    """Tracker error, metres."""
+    drop: tuple[float, float] = (0.0, 0.3)
+    """Share of frames lost."""
+    camera_fps: tuple[float, ...] = (15.0, 30.0)
+    """Camera frame rates, chosen with equal chance (no faster than the data's)."""
+    tries: int = 20
+    """Cameras drawn for a throw before one that keeps it in front is found; each miss moves the next 1 m back."""
+
+
+def any_camera(x: np.ndarray, fps: float, rng: np.random.Generator, ranges: AnyCameraRanges = AnyCameraRanges(),
+               rest_height: float = REST_HEIGHT) -> np.ndarray:
+    """Each trajectory of ``x`` (n, T, 3) metres as a user's camera and ``study classify`` would give it: a camera
+    drawn from ``ranges`` (:func:`filmed`), then the tracker's frame rate, noise and lost frames as
+    :func:`randomised` draws them. (n, T, 3) out, x = y = 0."""
+    x = _check(x)
+    out = np.empty_like(x)
+    for i in range(len(x)):
+        seen = None
+        for k in range(ranges.tries):
+            cam = AnyCamera(height=float(rng.uniform(*ranges.height)), tilt=float(rng.uniform(*ranges.tilt)),
+                            yaw=float(rng.uniform(*ranges.yaw)), distance=float(rng.uniform(*ranges.distance)) + k)
+            factor = float(np.exp(rng.uniform(*np.log(ranges.size_factor))))
+            seen = filmed(x[i], cam, factor, rest_height)
+            if seen is not None:
+                break
+        if seen is None:
+            raise ConfigError(f"any_camera: no camera of {ranges.tries} tries keeps throw {i} in front of it; "
+                              "raise AnyCameraRanges.distance or tries")
+        ob = Observation(noise=float(rng.uniform(*ranges.noise)), drop=float(rng.uniform(*ranges.drop)),
+                         camera_fps=float(rng.choice(ranges.camera_fps)))
+        out[i] = ob.apply(seen[None], fps, rng, rest_height=rest_height)[0]
     return out

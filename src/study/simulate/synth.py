@@ -128,6 +128,10 @@ def dataset(
 
     ``cfg`` may be a preset name. A cached file from other code or library versions has another key,
     so it is never mistaken for this one; a corrupt one is replaced.
+    Example::
+
+        ds = study.dataset("smoke", seed=0)      # simulated once, then read from data/
+        x, y = ds.train.x, ds.train.y            # (n, T, 3) float32 metres; (n,) 0 light, 1 heavy
     """
     if isinstance(cfg, str):
         cfg = SynthConfig.preset(cfg)
