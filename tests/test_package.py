@@ -150,3 +150,32 @@ def test_two_makers_of_one_cache_entry_make_it_once(tmp_path):
     for t in threads:
         t.join()
     assert len(made) == 1 and target.read_text() == made[0]
+
+
+def test_the_public_api_is_every_name_a_user_needs_each_documented_with_an_example():
+    names = set(study.__all__)
+    assert {"dataset", "fit", "evaluate", "load", "track_video", "classify", "ClassPrior", "TrainConfig"} <= names
+    for name in sorted(names - {"CLASSES"}):
+        obj = getattr(study, name)
+        assert obj.__doc__ and "Example::" in obj.__doc__, f"study.{name} has no example in its docstring"
+    namespace: dict = {}
+    exec("from study import *", namespace)
+    assert names <= set(namespace) and "study.learn.train" == study.fit.__module__
+    with pytest.raises(AttributeError, match="no attribute 'fitt'"):
+        study.fitt  # noqa: B018
+
+
+@pytest.mark.slow  # simulates the smoke data set
+def test_one_call_trains_without_a_process_pool(tmp_path, monkeypatch):
+    import concurrent.futures
+    import multiprocessing
+
+    ds = study.dataset("smoke", seed=0, data_dir=tmp_path, progress=False)
+
+    def no_pool(*a, **k):
+        raise AssertionError("a process pool was started")
+
+    monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", no_pool)
+    monkeypatch.setattr(multiprocessing, "Pool", no_pool)
+    model = study.fit(ds, study.TrainConfig(length=1.0, epochs=1, hidden=4, truncation=5), progress=False, warn=False)
+    assert 0.0 <= study.evaluate(model, ds.test)["accuracy"] <= 1.0

@@ -14,11 +14,21 @@ A reproduction of Fathollahi & Kasturi, arXiv:1609.00361, as a package in three 
 
 Every module is imported on demand, so ``import study`` stays cheap, and the modules users reach for
 have short names: ``from study import synth, train, track`` is ``study.simulate.synth`` and so on.
+
+The public API (``__all__``, the book's reference page): simulate a data set (:func:`dataset`, :class:`SynthConfig`,
+:class:`ClassPrior`), train and evaluate (:class:`TrainConfig`, :func:`fit`, :func:`evaluate`), save and load
+(:func:`load`, :func:`load_dataset`, :func:`save_dataset`), track a video (:func:`track_video`, :func:`read_csv`) and
+answer light or heavy for a video or a track (:func:`classify`), and the book's experiments (:class:`Runner`)::
+
+    import study
+
+    ds = study.dataset("smoke", seed=0)
+    model = study.fit(ds, study.TrainConfig(length=1.0, epochs=5))
+    print(study.evaluate(model, ds.test)["accuracy"])
 """
 
 import importlib
 import os
-from types import ModuleType
 
 # Headless rendering by default: MuJoCo reads MUJOCO_GL when it is first imported, which any submodule
 # may do (set MUJOCO_GL=osmesa, or glfw with a display, before importing study to choose otherwise).
@@ -43,9 +53,31 @@ SHORT_NAMES: dict[str, str] = {
 """``study.<short>`` -> the module it names, for ``from study import synth`` and friends."""
 
 
-def __getattr__(name: str) -> ModuleType:
-    if name in SHORT_NAMES:
-        module = importlib.import_module(SHORT_NAMES[name])
-        globals()[name] = module
-        return module
-    raise AttributeError(f"module 'study' has no attribute {name!r}")
+EXPORTS: dict[str, str] = {
+    "SynthConfig": "study.simulate.config", "ClassPrior": "study.simulate.config", "dataset": "study.simulate.synth",
+    "Dataset": "study.simulate.data", "Split": "study.simulate.data",
+    "load_dataset": "study.simulate.data:load", "save_dataset": "study.simulate.data:save",
+    "TrainConfig": "study.learn.config", "fit": "study.learn.train", "evaluate": "study.learn.train",
+    "load": "study.learn.trained", "TrainedModel": "study.learn.trained", "Ensemble": "study.learn.trained",
+    "TrackConfig": "study.see.config", "track_video": "study.see.track", "read_csv": "study.see.trackfile",
+    "classify": "study.answer", "Answer": "study.answer", "Runner": "study.runs.runner",
+}
+"""The public API: ``study.<name>`` -> the module that defines it (``module:attribute`` where the names differ)."""
+
+__all__ = ["CLASSES", *EXPORTS]
+
+
+def __getattr__(name: str) -> object:
+    if name in EXPORTS:
+        module, _, attr = EXPORTS[name].partition(":")
+        value = getattr(importlib.import_module(module), attr or name)
+    elif name in SHORT_NAMES:
+        value = importlib.import_module(SHORT_NAMES[name])
+    else:
+        raise AttributeError(f"module 'study' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *EXPORTS, *SHORT_NAMES})

@@ -196,7 +196,7 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--data", type=Path, required=True, help="dataset file (.npz) written by `study synth`")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="model directory to write (replaced if it exists)")
-    _add_fields(p, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig)], flags={"max_epochs": "--epochs"})
+    _add_fields(p, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig)], flags={"epochs": "--epochs"})
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
@@ -374,62 +374,14 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                    help="height of the object's centre at rest, metres (default: from --object-size and --object-shape)")
 
     def run(a: argparse.Namespace) -> int:
-        from study import CLASSES
-        from study.core.errors import ConfigError, ModelError
-        from study.learn import train
-        from study.see import track
+        from study import answer
 
-        if a.model is not None:
-            tm, which = train.load(a.model), f"model {a.model}"
-            members = [tm]
-        else:
-            from study.core import datadir
-            from study.runs import recommended
-
-            tm, rec = recommended.load(datadir.resolve(a.data_dir))
-            which, members = rec.describe(), list(tm.members)
-        for m in members:
-            if m.failed:
-                _warn(f"{which}: {m.failure()}; its answers are near chance")
-        if tm.dims != "z":
-            raise ModelError(
-                f"{which} was trained on {tm.dims!r}; one camera gives only the height: "
-                "use a model trained on 'z' (the paper's real-world test does)"
-            )
-        from study.see.scale import read_scale
-
-        shape = _object_shape(a)
-        if a.input.suffix.lower() == ".csv":
-            traj = track.read_csv(a.input)
-            if a.metres_per_pixel is not None:
-                traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=a.metres_per_pixel)
-                scale = f"scale {a.metres_per_pixel * 1000:.2f} mm/px as given"
-            elif traj.units != "m" and shape is not None:  # `study track` without --object-size wrote pixels
-                read = read_scale(traj, shape, a.scale_from)
-                traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=read.metres_per_pixel)
-                scale = read.note()
-            elif traj.units != "m":
-                raise ConfigError(
-                    f"trajectory CSV {a.input}: heights are in pixels; give the object's size (--object-size D, "
-                    "metres) or --metres-per-pixel, so the model sees metres"
-                )
-            else:
-                scale = f"heights as the CSV holds them ({traj.height_per_pixel * 1000:.2f} mm/px)"
-        else:
-            traj = track.track_video(a.input, _track_config(a), shape=shape, scale_from=a.scale_from,
-                                     metres_per_pixel=a.metres_per_pixel)
-            scale = (f"scale {a.metres_per_pixel * 1000:.2f} mm/px as given" if a.metres_per_pixel is not None
-                     else read_scale(traj, shape, a.scale_from).note())
-        rest = a.rest_height if a.rest_height is not None else shape.rest_height() if shape else 0.0
-        x = track.to_model_input(traj, tm.fps, tm.n_frames, rest_height=rest)
-        p_cls = tm.predict_proba(x[None])[0]
-        k = int(p_cls.argmax())
-        piece = traj.longest()
-        print(f"{a.input}: {CLASSES[k]} (p = {float(p_cls[k]):.3f}; {which})")
-        print(f"  assumed: {scale}; the ground at the lowest centre (row {traj.ground_v:.0f}), one scale for the "
-              f"whole video (the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m "
-              f"up at rest; read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} "
-              f"frames found, {len(traj.segments())} piece(s)")
+        ans = answer.classify(a.input, a.model, track_config=_track_config(a), object_shape=_object_shape(a),
+                              scale_from=a.scale_from, metres_per_pixel=a.metres_per_pixel,
+                              rest_height=a.rest_height, data_dir=a.data_dir)
+        if "near chance" in ans.assumed:
+            _warn(ans.assumed.rsplit("; ", 1)[-1])
+        print(ans)
         return 0
 
     p.set_defaults(run=run)

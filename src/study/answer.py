@@ -1,0 +1,134 @@
+"""Light or heavy for one video or track of a user's own: ``study classify`` as one Python call.
+
+The video is tracked (``study.see.track``), its pixels turned into heights by one scale read off the object
+(``study.see.scale``: its mean apparent size by default), cut to the model's input, and classified by a trained Z
+model: one given, or the one the last book build in the data folder recommends (``study.runs.recommended``).
+The :class:`Answer` says what it assumed, so a wrong scale is never silent.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from study import CLASSES
+from study.core.errors import ConfigError, ModelError
+from study.learn.trained import Ensemble, TrainedModel
+from study.learn.trained import load as load_model
+from study.see import track
+from study.see.config import TrackConfig
+from study.see.scale import DEFAULT, ObjectShape, read_scale
+from study.see.trajectory import Trajectory
+
+TENNIS_BALL = ObjectShape("sphere", (0.067,))
+"""What a user throws unless told: a tennis ball, 6.7 cm across."""
+
+
+@dataclass(frozen=True)
+class Answer:
+    """What :func:`classify` says about one throw.
+
+    Example::
+
+        answer = study.classify("throw.mp4")
+        print(answer)                                 # the label, its probability, what it assumed
+    """
+
+    source: str
+    """The video or CSV classified."""
+    label: str
+    """``"light"`` (bounces: safe to pass) or ``"heavy"`` (slides: must avoid), one of ``study.CLASSES``."""
+    p: float
+    """The probability the model gives ``label``, 0.5-1."""
+    p_heavy: float
+    """The probability of ``"heavy"``, 0-1."""
+    model: str
+    """Which model answered (a folder, or the recommended model and its seeds)."""
+    assumed: str
+    """What the answer rests on: the scale and where it came from, the ground, the frames read."""
+    trajectory: Trajectory
+    """The track, in metres, as classified."""
+
+    def __str__(self) -> str:
+        return f"{self.source}: {self.label} (p = {self.p:.3f}; {self.model})\n  assumed: {self.assumed}"
+
+
+def shape(size: float | tuple[float, ...] = 0.067, kind: str = "ball") -> ObjectShape:
+    """The thrown object for the scale: ``kind`` 'ball' (``size``: its diameter, metres), 'box' (one edge, a cube,
+    or three) or 'cylinder' (diameter and length)."""
+    sizes = (float(size),) if np.isscalar(size) else tuple(float(s) for s in size)  # type: ignore[arg-type]
+    return ObjectShape("sphere" if kind == "ball" else kind, sizes)
+
+
+def _model(model: str | Path | TrainedModel | Ensemble | None,
+           data_dir: str | Path | None) -> tuple[TrainedModel | Ensemble, str]:
+    if isinstance(model, (TrainedModel, Ensemble)):
+        return model, "the model given"
+    if model is not None:
+        return load_model(model), f"model {model}"
+    from study.core import datadir
+    from study.runs import recommended
+
+    ensemble, rec = recommended.load(datadir.resolve(data_dir))
+    return ensemble, rec.describe()
+
+
+def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | None = None, *,
+             track_config: TrackConfig | None = None, object_shape: ObjectShape | None = TENNIS_BALL,
+             scale_from: str = DEFAULT, metres_per_pixel: float | None = None, rest_height: float | None = None,
+             data_dir: str | Path | None = None) -> Answer:
+    """Light or heavy for the throw in ``source``: a video (tracked with ``track_config``, by default a
+    tennis-yellow ball) or a trajectory CSV from ``study track --out`` (pixels are scaled as a video's are).
+
+    ``model``: a trained Z model (a folder, or a loaded model or ensemble); None: the model the last book build in
+    ``data_dir`` recommends. The scale: ``metres_per_pixel`` if you measured it, else read off ``object_shape``
+    as ``scale_from`` says ('mean': its mean apparent size; 'rest'; 'gravity'). ``rest_height``: the centre's
+    height at rest, metres (default: the shape's). Raises ``ModelError`` for a model that does not read heights
+    only, ``ConfigError`` for a pixel track with nothing to scale it by, ``TrackingError`` / ``GeometryError`` /
+    ``VideoError`` naming the file and what to do.
+
+    Example::
+
+        answer = study.classify("throw.mp4", track_config=study.TrackConfig(color="orange"),
+                                object_shape=study.answer.shape(0.2, "box"))
+        print(answer.label, answer.p, answer.assumed)
+    """
+    m, which = _model(model, data_dir)
+    members = list(m.members) if isinstance(m, Ensemble) else [m]
+    if m.dims != "z":
+        raise ModelError(f"{which} was trained on {m.dims!r}; one camera gives only the height: use a model trained "
+                         "on 'z' (the paper's real-world test does)")
+    path = Path(source)
+    if path.suffix.lower() == ".csv":
+        traj = track.read_csv(path)
+        if metres_per_pixel is not None:
+            traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=metres_per_pixel)
+            scale = f"scale {metres_per_pixel * 1000:.2f} mm/px as given"
+        elif traj.units != "m" and object_shape is not None:  # `study track` without --object-size wrote pixels
+            read = read_scale(traj, object_shape, scale_from)
+            traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=read.metres_per_pixel)
+            scale = read.note()
+        elif traj.units != "m":
+            raise ConfigError(f"trajectory CSV {path}: heights are in pixels; give the object's size (--object-size "
+                              "D, metres) or --metres-per-pixel, so the model sees metres")
+        else:
+            scale = f"heights as the CSV holds them ({traj.height_per_pixel * 1000:.2f} mm/px)"
+    else:
+        traj = track.track_video(path, track_config or TrackConfig(), shape=object_shape, scale_from=scale_from,
+                                 metres_per_pixel=metres_per_pixel)
+        scale = (f"scale {metres_per_pixel * 1000:.2f} mm/px as given" if metres_per_pixel is not None
+                 else read_scale(traj, object_shape, scale_from).note() if object_shape is not None
+                 else "scale from the object's size at rest")
+    rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0
+    x = track.to_model_input(traj, m.fps, m.n_frames, rest_height=rest)
+    p = m.predict_proba(x[None])[0]
+    k = int(p.argmax())
+    piece = traj.longest()
+    failed = [mm.failure() for mm in members if mm.failed]
+    assumed = (f"{scale}; the ground at the lowest centre (row {traj.ground_v:.0f}), one scale for the whole video "
+               f"(the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m up at rest; "
+               f"read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames found, "
+               f"{len(traj.segments())} piece(s)" + (f"; {failed[0]}: its answers are near chance" if failed else ""))
+    return Answer(str(source), CLASSES[k], float(p[k]), float(p[1]), which, assumed, traj)
