@@ -121,7 +121,7 @@ def _track_each(videos: Sequence[Video], track_one: Callable[[Video, track.Track
     with Progress(desc, total=len(videos), show=progress, unit="video") as bar:
         for v in videos:
             try:
-                out[v.path.name] = Tracked(track_one(v, track.TrackConfig(color=v.color, progress=False)))
+                out[v.path.name] = Tracked(track_one(v, v.track_config()))
             except StudyError as e:
                 out[v.path.name] = Tracked(None, str(e))
             bar.update()
@@ -132,7 +132,7 @@ def _as_a_user(v: Video, cfg: track.TrackConfig, shape: ObjectShape | None = Non
     """``v`` as ``study classify VIDEO --color C --object-size D`` tracks it: no camera, no ground truth; the scale
     read the default way (``study.see.scale.DEFAULT``) off an object of ``shape`` (None: a ball of the video's
     ``object_size``)."""
-    return track.track_video(v.path, cfg, shape=shape or ObjectShape("sphere", (v.object_size,)),
+    return track.track_video(v.path, cfg, shape=shape or v.object_shape(),
                              scale_from=scale.DEFAULT)
 
 
@@ -259,7 +259,7 @@ def tracking_error(videos: Sequence[Video]) -> PixelError:
             continue
         gt = render.read_truth(v.truth)
         try:
-            traj = track.detect_all(v.path, track.TrackConfig(color=v.color, progress=False))
+            traj = track.detect_all(v.path, v.track_config())
         except StudyError:
             total += len(gt["t"])
             continue

@@ -97,7 +97,7 @@ def video_heights(v: Video, shape: ObjectShape) -> Heights:
     paths: dict[str, np.ndarray | str] = {}
     tracks: dict[str, Trajectory] = {}
     try:
-        px = track.track_video(v.path, track.TrackConfig(color=v.color, progress=False))
+        px = track.track_video(v.path, v.track_config())
     except StudyError as e:
         return Heights(exact, dict.fromkeys(PATHS, str(e)), {})
     for name in PATHS:

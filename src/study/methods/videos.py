@@ -6,8 +6,8 @@ and renders them with ``study.see.render`` from a side camera (the launch turned
 paper's videos), with a known class and ground truth: the paper's 20 + 20 design, heavy objects included; the
 videos are cached by a key of everything that determines them, this module's code included
 (``study.core.cache.code_hash("video")``). :func:`read_manifest` (:func:`real_clips`): a folder of labelled videos
-with a ``MANIFEST.csv`` (columns ``file`` and ``label``; other columns are kept), the real clips beside the
-project or the reader's own.
+with a ``MANIFEST.csv`` (columns ``file``, ``label``, and optionally ``color``, ``object_size``, ``object_shape``;
+other columns are kept), the real clips beside the project or the reader's own.
 """
 
 from __future__ import annotations
@@ -26,6 +26,8 @@ from study.core import cache, datadir
 from study.core.errors import ConfigError, DataError
 from study.core.progress import Progress
 from study.see import render
+from study.see.config import COLORS, TrackConfig
+from study.see.scale import ObjectShape
 from study.simulate import synth
 
 LABEL_ALIASES = {"light": "light", "bouncy": "light", "ball": "light", "heavy": "heavy", "sliding": "heavy", "cube": "heavy"}
@@ -41,24 +43,46 @@ TENNIS_BALL = 0.067
 """Diameter of a tennis ball, metres (ITF: 6.54-6.86 cm)."""
 
 
+SHAPES = ("ball", "box", "cylinder")
+"""What a manifest's ``object_shape`` may say was thrown."""
+
+UNKNOWN_LABELS = ("", "?", "unknown")
+"""Manifest labels that say the answer is not known: the video is classified, not scored."""
+
+
 @dataclass
 class Video:
-    """One labelled video and how to read it."""
+    """One video, its label if known, and how to read it."""
 
     path: Path
     """The video file."""
-    label: str
-    """'light' or 'heavy'."""
+    label: str | None
+    """'light', 'heavy', or None where the manifest does not know (classified, not scored)."""
     color: str = "tennis"
-    """The tracker's colour (``study.see.config.COLORS``)."""
+    """The tracker's colour (``study.see.config.COLORS``; ignored where ``hsv`` is given)."""
     object_size: float = TENNIS_BALL
-    """Equivalent-disc diameter of the object's image, metres (sets the pixel scale)."""
+    """The object's size, metres: a ball's diameter, a box's edge, a cylinder's diameter (sets the pixel scale)."""
     rest_height: float = TENNIS_BALL / 2
     """Height of the object's centre when it rests on the ground, metres."""
     truth: Path | None = None
     """Ground-truth CSV of a rendered video (``study.see.render``), if any."""
     info: dict[str, Any] = field(default_factory=dict)
     """Other manifest columns."""
+    hsv: tuple[int, int, int, int, int, int] | None = None
+    """An explicit HSV range for the tracker (H, S, V low, then high; OpenCV's scale) instead of ``color``."""
+    shape: str = "ball"
+    """What was thrown, one of :data:`SHAPES` (its silhouette sets the scale)."""
+    sizes: tuple[float, ...] = ()
+    """All of the object's sizes where its shape takes more than ``object_size`` (a box's three edges, a cylinder's
+    diameter and length), metres."""
+
+    def track_config(self) -> TrackConfig:
+        """The tracker's settings for this video: its colour or HSV range, no progress bar."""
+        return TrackConfig(color=self.color, hsv=self.hsv, progress=False)
+
+    def object_shape(self) -> ObjectShape:
+        """The thrown object as ``study.see.scale`` reads its size off the video."""
+        return ObjectShape("sphere" if self.shape == "ball" else self.shape, self.sizes or (self.object_size,))
 
 
 def real_clips_dir(path: str | Path | None = None) -> Path:
@@ -72,31 +96,83 @@ def real_clips_dir(path: str | Path | None = None) -> Path:
 
 
 def read_manifest(video_dir: str | Path, color: str = "tennis", object_size: float = TENNIS_BALL) -> list[Video]:
-    """The videos listed in ``video_dir/MANIFEST.csv`` (columns ``file``, ``label``), in file order.
+    """The videos listed in ``video_dir/MANIFEST.csv``, in file order. Its columns (a header row, then one row per
+    video; only ``file`` is required)::
 
-    Raises :class:`DataError` for a missing folder, manifest or video, :class:`ConfigError` for an
-    unknown label (allowed: see :data:`LABEL_ALIASES`).
+        file,label,color,object_size,object_shape
+        throw1.mp4,light,tennis,0.067,ball
+        block.mp4,heavy,orange,0.2,box
+        mine.mp4,,20 100 100 35 255 255,0.07,ball
+
+    ``label``: light or heavy (or an alias, :data:`LABEL_ALIASES`), or empty / ``?`` / ``unknown`` where it is not
+    known; ``color``: a tracker colour (``study.see.config.COLORS``) or an HSV range, six numbers low then high
+    (default ``color``); ``object_size``: metres, a ball's diameter, a box's edge or three, a cylinder's diameter and length, separated by
+    spaces (default ``object_size``);
+    ``object_shape``: ball, box or cylinder (default ball). Other columns are kept in :attr:`Video.info`. A manifest
+    with only file and label (the older format) reads as before.
+
+    Raises :class:`DataError` for a missing folder, manifest or video, :class:`ConfigError` for an unknown label,
+    colour, shape or a bad size, naming the manifest, the row's file and what to write.
     """
     d = Path(video_dir)
     m = d / "MANIFEST.csv"
+    if d.is_file():
+        raise DataError(f"video_dir {d} is a file; give the folder that holds the videos and their MANIFEST.csv")
     if not d.is_dir():
         raise DataError(f"video_dir {d}: no such folder; point it at a folder of videos with a MANIFEST.csv")
     if not m.is_file():
-        raise DataError(f"video_dir {d}: no MANIFEST.csv; write one with the columns file,label")
+        raise DataError(f"video_dir {d}: no MANIFEST.csv; write one with the columns file,label (and optionally "
+                        "color,object_size,object_shape)")
     rows = list(csv.DictReader(m.open(newline="")))
-    if not rows or not {"file", "label"} <= set(rows[0]):
-        raise DataError(f"manifest {m}: needs a header with the columns file and label, and one row per video")
+    if not rows or "file" not in rows[0]:
+        raise DataError(f"manifest {m}: needs a header with at least the column file, and one row per video")
     out = []
     for r in rows:
-        lab = LABEL_ALIASES.get(r["label"].strip().lower())
-        if lab is None:
-            raise ConfigError(f"manifest {m}: label {r['label']!r} of {r['file']} is unknown; use one of {', '.join(LABEL_ALIASES)}")
-        p = d / r["file"]
-        if not p.is_file():
-            raise DataError(f"manifest {m}: {r['file']} is listed but not in {d}")
-        info = {k: v for k, v in r.items() if k not in ("file", "label")}
-        out.append(Video(p, lab, color=color, object_size=object_size, rest_height=object_size / 2, info=info))
+        out.append(_manifest_row(m, {k: (v or "").strip() for k, v in r.items() if k is not None}, color, object_size))
     return sorted(out, key=lambda v: v.path.name)
+
+
+def _manifest_row(m: Path, r: dict[str, str], color: str, object_size: float) -> Video:
+    """One row of :func:`read_manifest`'s manifest ``m`` as a :class:`Video`."""
+    where = f"manifest {m}, {r['file'] or 'a row without a file'}"
+    raw = r.get("label", "").lower()
+    label = None if raw in UNKNOWN_LABELS else LABEL_ALIASES.get(raw)
+    if raw not in UNKNOWN_LABELS and label is None:
+        raise ConfigError(f"{where}: label {r['label']!r} is unknown; use one of {', '.join(LABEL_ALIASES)}, or "
+                          "leave it empty where the answer is not known")
+    p = m.parent / r["file"]
+    if not r["file"] or not p.is_file():
+        raise DataError(f"{where}: listed but not in {m.parent}")
+    colour, hsv = r.get("color") or color, None
+    if any(c.isdigit() for c in colour):
+        try:
+            hsv = tuple(int(float(x)) for x in colour.replace(",", " ").split())
+        except ValueError:
+            hsv = ()
+        if len(hsv) != 6:
+            raise ConfigError(f"{where}: color {colour!r}; give a colour name ({', '.join(COLORS)}) or an HSV range "
+                              "of six numbers, low H S V then high H S V")
+        colour = color
+    elif colour not in COLORS:
+        raise ConfigError(f"{where}: color {colour!r} is unknown; use one of {', '.join(COLORS)} or six HSV numbers")
+    try:
+        sizes = tuple(float(x) for x in (r.get("object_size") or str(object_size)).split())
+    except ValueError:
+        sizes = ()
+    if not sizes or not all(0.001 <= x <= 10.0 for x in sizes):
+        raise ConfigError(f"{where}: object_size {r.get('object_size')!r}; give the object's size in metres "
+                          "(a tennis ball: 0.067; a cylinder's diameter and length: 0.2 0.5)")
+    shape = (r.get("object_shape") or "ball").lower()
+    if shape not in SHAPES:
+        raise ConfigError(f"{where}: object_shape {shape!r} is unknown; use one of {', '.join(SHAPES)}")
+    v = Video(p, label, color=colour, object_size=sizes[0], hsv=hsv, shape=shape,  # type: ignore[arg-type]
+              sizes=sizes if len(sizes) > 1 else (),
+              info={k: x for k, x in r.items() if k not in ("file", "label", "color", "object_size", "object_shape")})
+    try:
+        v.rest_height = v.object_shape().rest_height()
+    except ConfigError as e:
+        raise ConfigError(f"{where}: {e}") from None
+    return v
 
 
 def real_clips(video_dir: str | Path = "", color: str = "tennis", object_size: float = TENNIS_BALL,
