@@ -107,6 +107,44 @@ def test_manifest_errors(tmp_path):
         realworld.read_manifest(tmp_path)
 
 
+@pytest.mark.slow  # uses the rendered set
+def test_the_chapter_reads_a_folder_of_two_colours_and_answers_each_clip(rendered_set, tmp_path):
+    """A reader's own folder: one clip in the renders' orange, one recoloured blue and given as six HSV numbers with
+    no class; the chapter's functions track each by its own colour, score only the labelled one, and write every
+    clip's answer as a CSV."""
+    import csv
+    import shutil
+
+    import cv2
+
+    light = rendered_set[0]
+    shutil.copy(light.path, tmp_path / "orange.mp4")
+    cap = cv2.VideoCapture(str(light.path))
+    frames = []
+    ok, f = cap.read()
+    while ok:
+        frames.append(f[:, :, ::-1].copy())  # red and blue swapped: the orange box turns blue
+        ok, f = cap.read()
+    w = cv2.VideoWriter(str(tmp_path / "blue.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, frames[0].shape[1::-1])
+    for f in frames:
+        w.write(f)
+    w.release()
+    size = light.object_size
+    (tmp_path / "MANIFEST.csv").write_text(f"file,label,color,object_size\norange.mp4,light,orange,{size}\n"
+                                           f"blue.mp4,?,90 120 60 130 255 255,{size}\n")
+    clips = realworld.real_clips(tmp_path)
+    assert [(v.path.name, v.label, v.hsv is not None) for v in clips] == [("blue.mp4", None, True),
+                                                                            ("orange.mp4", "light", False)]
+    rows = realworld.classify(HeightRangeModel(), clips, realworld.track_all(clips, progress=False), progress=False)
+    assert all(r.tracked for r in rows) and rows[0].predicted == rows[1].predicted, "one throw, either colour"
+    acc = realworld.per_class_interval(rows)
+    assert acc["heavy"] is None and acc["light"].value in (0.0, 1.0), "the clip with no class is not scored"
+    table = realworld._real_table(rows)
+    assert [r["true"] for r in table.rows] == ["not known", "light"]
+    written = list(csv.DictReader(table.write_csv(tmp_path / "out" / "answers.csv").open()))
+    assert [r["file"] for r in written] == ["blue.mp4", "orange.mp4"] and written[1]["label"] == rows[1].predicted
+
+
 def test_untrackable_video_is_a_row_not_a_crash(tmp_path):
     bad = tmp_path / "bad.mp4"
     bad.write_text("not a video")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
+import shutil
 
 import cv2
 import model_toys
@@ -254,6 +255,49 @@ def test_cli_classify_video_and_csv(rendered, tmp_path, z_model, capsys):
     assert rc == 2 and "--metres-per-pixel" in capsys.readouterr().err
     rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv"), "--metres-per-pixel", "0.01"])
     assert rc == 0 and "(p = " in capsys.readouterr().out
+
+
+def _recoloured(src: Path, out: Path) -> Path:
+    """A copy of the video ``src`` with its red and blue channels swapped: the orange box turns blue."""
+    cap = cv2.VideoCapture(str(src))
+    fps, size = cap.get(cv2.CAP_PROP_FPS), (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
+    w = cv2.VideoWriter(str(out), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
+    ok, frame = cap.read()
+    while ok:
+        w.write(frame[:, :, ::-1].copy())
+        ok, frame = cap.read()
+    cap.release()
+    w.release()
+    return out
+
+
+def test_cli_classifies_a_manifest_of_two_colours_and_writes_the_answers(rendered, tmp_path, z_model, capsys):
+    folder, tm = z_model
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    shutil.copy(rendered.video, mine / "orange.mp4")
+    _recoloured(rendered.video, mine / "blue.mp4")
+    (mine / "lost.mp4").write_bytes(b"not a video")
+    (mine / "MANIFEST.csv").write_text("file,label,color,object_size,object_shape\n"
+                                       "orange.mp4,light,orange,0.2,box\n"
+                                       "blue.mp4,,90 120 60 130 255 255,0.2,box\n"  # HSV numbers; class not known
+                                       "lost.mp4,heavy,orange,0.2,box\n")
+    rc = cli.main(["classify", "--manifest", str(mine / "MANIFEST.csv"), "--model", str(folder),
+                   "--out", str(tmp_path / "answers.csv"), "--no-progress"])
+    out = capsys.readouterr().out
+    rows = {r["file"]: r for r in csv.DictReader((tmp_path / "answers.csv").open())}
+    assert rc == 0 and list(rows) == ["blue.mp4", "lost.mp4", "orange.mp4"]
+    assert rows["orange.mp4"]["label"] == rows["blue.mp4"]["label"] != "", "the same throw in either colour"
+    assert abs(float(rows["orange.mp4"]["p"]) - float(rows["blue.mp4"]["p"])) < 0.05
+    assert rows["blue.mp4"]["true"] == "" and rows["blue.mp4"]["correct"] == "", "no class given: not scored"
+    assert rows["orange.mp4"]["correct"] == str(rows["orange.mp4"]["label"] == "light").lower()
+    assert rows["lost.mp4"]["label"] == "" and "lost.mp4" in rows["lost.mp4"]["error"], "the others go on"
+    assert "3 videos, 2 classified" in out and "of 1 labelled ones right" in out
+    rc = cli.main(["classify", str(rendered.video), "--manifest", str(mine / "MANIFEST.csv")])
+    assert rc == 2 and "one of the two" in capsys.readouterr().err
+    (mine / "MANIFEST.csv").write_text("file,label,color\norange.mp4,light,purple\n")
+    rc = cli.main(["classify", "--manifest", str(mine), "--model", str(folder)])
+    assert rc == 2 and "orange.mp4: color 'purple' is unknown" in capsys.readouterr().err
 
 
 def test_cli_classify_rejects_xyz_model(rendered, tmp_path, capsys):

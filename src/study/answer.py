@@ -8,7 +8,7 @@ The :class:`Answer` says what it assumed, so a wrong scale is never silent.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -132,3 +132,69 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
                f"read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames found, "
                f"{len(traj.segments())} piece(s)" + (f"; {failed[0]}: its answers are near chance" if failed else ""))
     return Answer(str(source), CLASSES[k], float(p[k]), float(p[1]), which, assumed, traj)
+
+
+CSV_COLUMNS = ["file", "true", "label", "p", "p_heavy", "correct", "assumed", "error"]
+"""The columns of ``study classify --manifest --out``'s CSV (:meth:`FolderAnswer.row`)."""
+
+
+@dataclass(frozen=True)
+class FolderAnswer:
+    """One video of a manifest, answered or not."""
+
+    file: str
+    """The video's file name."""
+    true: str | None
+    """Its class as the manifest says, None where not known."""
+    answer: Answer | None
+    """What :func:`classify` said; None where it could not (see ``error``)."""
+    error: str = ""
+    """Why the video could not be classified ('' when it was)."""
+
+    @property
+    def correct(self) -> bool | None:
+        """Whether the answer is the manifest's class (None: no class given, or no answer)."""
+        return None if self.true is None or self.answer is None else self.answer.label == self.true
+
+    def row(self) -> dict[str, object]:
+        """The CSV row: file, true, label, p, p_heavy, correct, assumed, error."""
+        a = self.answer
+        return {"file": self.file, "true": self.true or "", "label": a.label if a else "",
+                "p": f"{a.p:.4f}" if a else "", "p_heavy": f"{a.p_heavy:.4f}" if a else "",
+                "correct": "" if self.correct is None else str(self.correct).lower(),
+                "assumed": a.assumed if a else "", "error": self.error}
+
+
+def manifest_folder(manifest: str | Path) -> Path:
+    """The folder of ``manifest``: the ``MANIFEST.csv`` file itself, or the folder that holds it."""
+    m = Path(manifest)
+    if m.is_file() and m.name != "MANIFEST.csv":
+        raise ConfigError(f"manifest {m}: name it MANIFEST.csv, beside the videos it lists (or give their folder)")
+    return m.parent if m.is_file() else m
+
+
+def classify_manifest(manifest: str | Path, model: str | Path | TrainedModel | Ensemble | None = None, *,
+                      color: str = "tennis", object_size: float = 0.067, scale_from: str = DEFAULT,
+                      data_dir: str | Path | None = None) -> list[FolderAnswer]:
+    """Every video of a ``MANIFEST.csv`` (``study.methods.videos.read_manifest``: its file, label if known, colour or
+    HSV range, size and shape; ``color`` and ``object_size`` for rows that give none) classified as :func:`classify`
+    does, by one model loaded once. A video that cannot be tracked or scaled gets its error, and the others go on.
+
+    Example::
+
+        for row in study.answer.classify_manifest("my-videos/MANIFEST.csv"):
+            print(row.file, row.true, row.answer.label if row.answer else row.error)
+    """
+    from study.core.errors import StudyError
+    from study.methods.videos import read_manifest
+
+    m, which = _model(model, data_dir)
+    out = []
+    for v in read_manifest(manifest_folder(manifest), color=color, object_size=object_size):
+        try:
+            ans = classify(v.path, m, track_config=v.track_config(), object_shape=v.object_shape(),
+                           scale_from=scale_from, rest_height=v.rest_height)
+            out.append(FolderAnswer(v.path.name, v.label, replace(ans, model=which)))
+        except StudyError as e:
+            out.append(FolderAnswer(v.path.name, v.label, None, str(e)))
+    return out

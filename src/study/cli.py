@@ -361,7 +361,15 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
             "so x and y are zero. Prints the class and its probability."
         ),
     )
-    p.add_argument("input", type=Path, metavar="VIDEO_OR_CSV", help="a video, or a trajectory CSV from 'study track --out'")
+    p.add_argument("input", type=Path, metavar="VIDEO_OR_CSV", nargs="?",
+                   help="a video, or a trajectory CSV from 'study track --out'")
+    p.add_argument("--manifest", type=Path, default=None, metavar="FILE",
+                   help="classify every video a MANIFEST.csv lists instead (columns file, label if known, and "
+                   "optionally color (a name or six HSV numbers), object_size (metres), object_shape; rows without "
+                   "them use --color and --object-size); prints one line a video and how many were right")
+    p.add_argument("--out", type=Path, default=None, metavar="CSV",
+                   help="with --manifest: write each video's answer here too (file, true, label, p, p_heavy, "
+                   "correct, assumed, error)")
     p.add_argument("--model", type=Path, default=None,
                    help="trained model directory (default: the model the last book build in the data folder "
                    "recommends for a camera, its seeds' mean)")
@@ -375,7 +383,14 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
 
     def run(a: argparse.Namespace) -> int:
         from study import answer
+        from study.core.errors import ConfigError
 
+        if (a.input is None) == (a.manifest is None):
+            raise ConfigError("give a video or CSV to classify, or --manifest FILE for a folder of them (one of the two)")
+        if a.manifest is not None:
+            return _classify_manifest(a)
+        if a.out is not None:
+            raise ConfigError("--out writes a manifest's answers; with one video, its answer is printed")
         ans = answer.classify(a.input, a.model, track_config=_track_config(a), object_shape=_object_shape(a),
                               scale_from=a.scale_from, metres_per_pixel=a.metres_per_pixel,
                               rest_height=a.rest_height, data_dir=a.data_dir)
@@ -385,6 +400,36 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         return 0
 
     p.set_defaults(run=run)
+
+
+def _classify_manifest(a: argparse.Namespace) -> int:
+    """``study classify --manifest``: every video of the manifest, one line each, then the tally."""
+    import csv
+    import io
+
+    from study import answer
+    from study.core import cache
+
+    if a.out is not None:
+        check_writable(a.out, "answers CSV")  # before the tracking, not after it
+    rows = answer.classify_manifest(a.manifest, a.model, color=a.color, object_size=a.object_size[0],
+                                    scale_from=a.scale_from, data_dir=a.data_dir)
+    for r in rows:
+        got = (f"{r.answer.label} (p = {r.answer.p:.3f})" if r.answer else f"not classified: {r.error}")
+        mark = {True: "  right", False: "  wrong", None: ""}[r.correct]
+        print(f"{r.file}: {got}" + (f"; true {r.true}{mark}" if r.true else ""))
+    known = [r.correct for r in rows if r.correct is not None]
+    print(f"{len(rows)} videos, {sum(r.answer is not None for r in rows)} classified"
+          + (f", {sum(known)} of {len(known)} labelled ones right" if known else "")
+          + (f"; model: {rows[0].answer.model}" if rows and rows[0].answer else ""))
+    if a.out is not None:
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=answer.CSV_COLUMNS, lineterminator="\n")
+        w.writeheader()
+        w.writerows(r.row() for r in rows)
+        cache.write_text_atomic(a.out, buf.getvalue())
+        print(f"answers written to {a.out}")
+    return 0
 
 
 def _add_results(sub: argparse._SubParsersAction) -> None:

@@ -996,12 +996,13 @@ def _user_table(models: dict[str, tuple[Sequence[Label], Sequence[Label], Sequen
 
 
 def _real_table(labels: Sequence[Label]) -> Table:
-    rows = [{"file": r.file, "found": pct(r.found, 0) if r.tracked else "—",
+    rows = [{"file": r.file, "true": r.label or "not known", "found": pct(r.found, 0) if r.tracked else "—",
              "pieces": r.pieces if r.tracked else "—", "bounces": r.bounces if r.tracked else "—",
              "p_light": f"{r.p_light:.2f}" if r.tracked else "—",
              "label": r.predicted if r.tracked else "not tracked: " + r.error} for r in labels]
-    return Table(rows, {"file": "file", "found": "found", "pieces": "pieces", "bounces": "bounces",
-                        "p_light": "p_light", "label": "label (Table 1's model)"}, empty="*No real clips were found.*")
+    return Table(rows, {"file": "file", "true": "true class", "found": "found", "pieces": "pieces",
+                        "bounces": "bounces", "p_light": "p_light", "label": "label (Table 1's model)"},
+                 empty="*No real clips were found.*")
 
 
 def _every_table(rec: Recommendation, rendered: Sequence[Video], real: Sequence[Video],

@@ -3,12 +3,16 @@ and tidy rows (lists of dicts) as Markdown tables, which the chapters' results r
 
 from __future__ import annotations
 
+import csv
+import io
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from study.core import cache
 from study.learn.metrics import bootstrap_accuracy, t_interval
 
 Format = str | Callable[[Any], str]
@@ -50,6 +54,17 @@ class Table:
         if not self.rows and self.empty:
             return self.empty
         return markdown(self.rows, self.columns, self.formats)
+
+    def write_csv(self, path: str | Path) -> Path:
+        """The rows as a CSV file at ``path`` (written atomically; one column per shown field, its name as the
+        header, raw values): what a reader takes into their own analysis. Raises ``OutputError`` naming ``path``
+        if it cannot be written."""
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=list(self.columns), extrasaction="ignore", lineterminator="\n")
+        w.writeheader()
+        w.writerows(self.rows)
+        cache.write_text_atomic(path, buf.getvalue())
+        return Path(path)
 
 
 @dataclass(frozen=True)
