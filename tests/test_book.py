@@ -436,6 +436,10 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
             assert text.count("<img") >= pngs, ch.stem
             figures += pngs
     assert figures >= 9  # the smoke book has nine figures at least, each an image
+    api = (tmp_path / "_build" / "html" / "book" / "api.html").read_text()
+    assert all(f'id="study.{name}"' in api for name in ("fit", "dataset", "classify", "TrainConfig")), "autodoc ran"
+    tutorial = (tmp_path / "_build" / "html" / "book" / "tutorial.html").read_text()
+    assert "test accuracy" in tutorial and "assumed: scale" in tutorial and "executed:" in tutorial, "every step ran"
     from study.book import results, summary
 
     built = results.load(tmp_path / results.FILE)  # refuses a stored verdict its inputs do not decide

@@ -190,8 +190,11 @@ def test_cli_train_and_evaluate(tmp_path, smoke_dataset, capsys):
     args = ["train", "--data", path, "--dims", "z", "--length", "0.5", "--epochs", "1", "--batch-size", "8",
             "--out", str(tmp_path / "m"), "--no-progress"]
     assert cli.main(args) == 0
-    out = json.loads(capsys.readouterr().out)
+    got = capsys.readouterr()
+    out = json.loads(got.out)
     assert out["model"] == str(tmp_path / "m") and out["failed"] is True, "3 validation throws cannot show learning"
+    assert f"{int(np.bincount(smoke_dataset.train.y).min())} training throws a class" in got.err
+    assert "study synth --train-per-class 200" in got.err, "a smoke-sized data set says how many throws it needs"
     assert cli.main(["evaluate", "--model", str(tmp_path / "m"), "--data", path]) == 0
     res = json.loads(capsys.readouterr().out)
     assert set(res["per_class_accuracy"]) == {"light", "heavy"} and np.sum(res["confusion"]) == len(smoke_dataset.test)

@@ -202,6 +202,8 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     def run(a: argparse.Namespace) -> int:
         import json
 
+        import numpy as np
+
         from study.learn import train
         from study.simulate import synth
 
@@ -214,11 +216,21 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
             tm.save(a.out)
         if tm.failed:
             _warn(f"{a.out}: {tm.failure()}")
+            per_class = int(min(np.bincount(ds.train.y, minlength=2)))
+            if per_class < ENOUGH_THROWS:
+                _warn(f"{a.data} has {per_class} training throws a class; the protocol trains on the study's 3-second "
+                      f"throws from about {ENOUGH_THROWS} a class (scripts/how_many_throws.py measures it): make more "
+                      f"with `study synth --train-per-class {ENOUGH_THROWS} --out FILE`")
         print(json.dumps({"model": str(a.out), "best_epoch": tm.best_epoch, "val_accuracy": tm.val_accuracy,
                           "failed": tm.failed}))
         return 0
 
     p.set_defaults(run=run)
+
+
+ENOUGH_THROWS = 200
+"""Training throws a class from which the protocol trained in every seed of ``scripts/how_many_throws.py`` (3-second
+throws; at 50 and 100 a class one seed of three failed, at 25 or fewer every seed)."""
 
 
 def _warn(message: str) -> None:
