@@ -113,20 +113,51 @@ def test_short_names_are_the_subpackage_modules():
         study.no_such_module  # noqa: B018
 
 
-@pytest.mark.slow  # simulates small datasets and trains for a few epochs
-def test_the_readme_python_example_runs_as_written(tmp_path):
-    """The README's Python block, as written except that every preset is 'smoke' (the paper's takes an hour), run
-    as a plain script."""
+def _readme_commands(readme: str) -> list[str]:
+    """Every command line of the README's bash blocks that the recipes test runs: all but ``make`` and ``study book``
+    (the smoke book build runs those), comments dropped."""
+    lines = [ln.split("  #")[0].strip() for b in re.findall(r"```bash\n(.*?)```", readme, flags=re.S)
+             for ln in b.splitlines()]
+    return [ln for ln in lines if ln and not ln.startswith(("make ", "study book"))]
+
+
+@pytest.mark.slow  # simulates the smoke data set, trains two epochs, renders a throw, executes the data chapter
+def test_every_readme_recipe_runs_as_written(tmp_path):
+    """The README's blocks as written, on smoke sizes (every preset 'smoke', the network's budget 2 epochs): the
+    Python block as a plain script, then every command line, in a folder that holds a rendered throw.mp4 and
+    my-videos/MANIFEST.csv, as a reader's would."""
+    import shlex
+
+    from study.see import render
+
     readme = (REPO / "README.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", readme, flags=re.S)
-    assert blocks, "the README has no Python example"
-    code = "\n".join(blocks).replace('"/tmp/my-model"', repr(str(tmp_path / "my-model"))).replace('"paper"', '"smoke"')
-    script = tmp_path / "example.py"  # a plain script, as a reader saves it: worker processes import it again
-    script.write_text(code)
-    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert len(blocks) == 1, "the README's Python recipe"
+    code = blocks[0].replace('"paper"', '"smoke"').replace("study.TrainConfig(", "study.TrainConfig(epochs=2, ")
+    (tmp_path / "recipe.py").write_text(code)  # a plain script, as a reader saves it
+    proc = subprocess.run([sys.executable, "recipe.py"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    assert (tmp_path / "my-model" / "weights.pt").is_file()
-    assert (tmp_path / "data").is_dir()  # the example's cache went where it ran, not into the project
+    assert (tmp_path / "my-model" / "weights.pt").is_file() and (tmp_path / "my-throws.npz").is_file()
+    assert (tmp_path / "data").is_dir()  # the recipe's cache went where it ran, not into the project
+
+    model = render.class_model("light")  # an orange 20 cm box, thrown across the view
+    qpos, qvel = render.initial_state((-1.5, 0.0, 1.0), (2.5, 0.0, 1.0))
+    render.render(model, qpos, qvel, tmp_path / "throw.mp4",
+                  render.RenderConfig(width=320, height=240, duration=1.5, shadows=False))
+    (tmp_path / "my-videos").mkdir()
+    shutil.copy(tmp_path / "throw.mp4", tmp_path / "my-videos" / "a.mp4")
+    (tmp_path / "my-videos" / "MANIFEST.csv").write_text("file,label,color,object_size,object_shape\n"
+                                                         "a.mp4,light,orange,0.2,box\n")
+    (tmp_path / "book").symlink_to(REPO / "book")
+    commands = _readme_commands(readme)
+    assert len(commands) >= 5 and any(c.startswith("study classify --manifest") for c in commands)
+    for line in commands:
+        argv = shlex.split(line.replace('"paper"', '"smoke"'))
+        exe = Path(sys.executable).parent / Path(argv[0]).name  # `study`, `.venv/bin/papermill`: this environment's
+        proc = subprocess.run([str(exe), *argv[1:]], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, f"{line}: {proc.stderr[-1500:]}"
+    for made in ("throw.csv", "throw-tracked.mp4", "answers.csv", "data-seed3.ipynb"):
+        assert (tmp_path / made).is_file(), made
 
 
 def test_two_makers_of_one_cache_entry_make_it_once(tmp_path):
