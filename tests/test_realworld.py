@@ -202,12 +202,13 @@ def _label(file: str, label: str, predicted: str = "", error: str = "") -> realw
 RENDERED = [_label("light_000.mp4", "light", "light"), _label("light_001.mp4", "light", "heavy"),
             _label("heavy_002.mp4", "heavy", "heavy"), _label("heavy_003.mp4", "heavy", error="lost it")]
 REAL = [_label("ball.mp4", "light", "light"), _label("ball2.mp4", "light", error="not found")]
-NAMES = ["positions, exact", "positions, randomised", "velocity, exact", "velocity, randomised"]
+NAMES = [f"{i}, {t}" for i in ("positions", "velocity") for t in ("exact", "randomised", "any-camera")]
 
 
 def _rec(choice: str = "velocity, randomised") -> Recommendation:
-    val = {n: Interval(0.5 + 0.1 * i, 0.4, 0.9, "bootstrap") for i, n in enumerate(NAMES)}
-    return Recommendation(choice, val, {})
+    val = {n: Interval(0.5 + 0.05 * i, 0.4, 0.9, "bootstrap") for i, n in enumerate(NAMES)}
+    user = {n: Interval(0.45 + 0.04 * i, 0.3, 0.9, "bootstrap") for i, n in enumerate(NAMES)}
+    return Recommendation(choice, val, user, {})
 
 
 def test_the_numbers_keep_their_names_follow_the_labels_and_read_back(tmp_path):
@@ -226,7 +227,8 @@ def test_the_numbers_keep_their_names_follow_the_labels_and_read_back(tmp_path):
     assert light.verdict == "not comparable" and "rendered MuJoCo" in light.decision.reason
     real = n.models["table1"].real["light"]
     assert real.value == 1.0 and "tennis balls" in real.decision.reason
-    assert n.candidate["velocity"]["exact"].val.value == pytest.approx(0.7)
+    assert n.candidate["velocity"]["exact"].val.value == pytest.approx(0.65)
+    assert n.candidate["velocity"]["exact"].val_user.value == pytest.approx(0.57)
     assert n.figure5.verdict == "qualitative" and n.models["table1"].rendered["light"].what == (
         "rendered light videos classified correctly, Table 1's Z model")
     f = tmp_path / "results.json"
@@ -244,7 +246,7 @@ def test_the_tables_show_the_paper_beside_ours_and_say_when_there_is_no_footage(
     assert [r["label"] for r in real.rows] == ["light", "not tracked: not found"] and real.rows[1]["found"] == "—"
     assert realworld._real_table([]).markdown() == "*No real clips were found.*"
     val = realworld._val_table(_rec("positions, randomised")).rows
-    assert [r["chosen"] for r in val] == ["", "✓", "", ""]
+    assert [r["chosen"] for r in val] == ["", "✓", "", "", "", ""] and val[1]["user"].startswith("49.0 %")
 
 
 def test_per_class_accuracy_counts_only_the_videos_tracked_and_the_scale_error_is_a_median():

@@ -286,8 +286,9 @@ def test_the_recommended_model_is_the_best_candidate_on_observed_validation_thro
     assert cands["velocity, randomised"].observe == "randomised" and cands["velocity, randomised"].observe_noise == 0.01
     assert cands["velocity, any-camera"] == dataclasses.replace(cands["velocity, randomised"], observe="any-camera")
     rec = realworld.recommended(r, cands, seeds=(0, 1), ob=ob)
-    choice, val, models = rec.choice, rec.val, rec.models
-    assert set(val) == set(models) == set(cands) and choice == max(val, key=lambda k: val[k].value)
+    choice, val, user, models = rec.choice, rec.val, rec.val_user, rec.models
+    assert set(val) == set(user) == set(models) == set(cands) and choice == max(user, key=lambda k: user[k].value)
+    assert val != user, "scored through the calibrated tracker and as a user's camera gives the throws"
     assert rec.model is models[choice]
     assert [m.config for m in models[choice].members] == [dataclasses.replace(cands[choice], seed=s) for s in (0, 1)]
     assert r.plan.n_models == 12 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())

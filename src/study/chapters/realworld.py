@@ -389,10 +389,15 @@ class Recommendation:
     mean over seeds."""
 
     choice: str
-    """The chosen candidate's name (``"positions, exact"`` and so on, :func:`candidates`)."""
+    """The chosen candidate's name (``"positions, exact"`` and so on, :func:`candidates`): the best on
+    :attr:`val_user`, the validation throws as ``study classify`` sees a user's video."""
     val: dict[str, Interval]
-    """Each candidate's accuracy on the observed validation throws: the mean over its seeds (each seed scored on
-    its own validation split), with a hierarchical bootstrap interval over seeds and throws."""
+    """Each candidate's accuracy on the validation throws observed through the calibrated tracker and the renderer's
+    camera: the mean over its seeds (each seed scored on its own validation split), with a hierarchical bootstrap
+    interval over seeds and throws."""
+    val_user: dict[str, Interval]
+    """The same on the validation throws as a user's camera, anywhere, and one scale give them
+    (``study.simulate.observe.any_camera``)."""
     models: dict[str, Ensemble]
     """Each candidate's seeds, as one classifier (the mean of their probabilities)."""
 
@@ -422,25 +427,29 @@ def candidates(runner: Runner, cfgs: dict[str, TrainConfig] | None = None,
 def recommended(runner: Runner, cands: dict[str, TrainConfig], seeds: Sequence[int] = (0,),
                 ob: observe.Observation | None = None) -> Recommendation:
     """Of ``cands`` (name -> config; :func:`candidates`), the one with the highest mean accuracy over ``seeds`` on
-    each seed's validation trajectories observed as the calibrated tracker (or ``ob``) observes them (never the
-    test split)."""
+    each seed's validation trajectories as a user's camera gives them (``observe.any_camera``: what ``study classify``
+    reads), each also scored as the calibrated tracker (or ``ob``) observes them (never the test split)."""
     if not seeds:
         raise ConfigError("recommended: seeds is empty; give at least one seed")
     ob = ob or calibration.observation(runner)
     first = next(iter(cands.values()))
     T, y = first.n_frames(runner.fps), runner.dataset.train.y
     correct: dict[str, list[np.ndarray]] = {k: [] for k in cands}
+    correct_user: dict[str, list[np.ndarray]] = {k: [] for k in cands}
     members: dict[str, list[train.TrainedModel]] = {k: [] for k in cands}
     for seed in seeds:
         _, va = train.split_train_val(len(y), first.val_fraction, seed)
         x_val = ob.observe(runner.dataset.train.x[va, :T], runner.fps, seed=6)
+        x_user = observe.any_camera(runner.dataset.train.x[va, :T], runner.fps, np.random.default_rng([seed, 7]))
         for k, c in cands.items():
             m = runner.trained(dataclasses.replace(c, dims="z", seed=seed))
             members[k].append(m)
             correct[k].append(correct_of([m], x_val, y[va])[0])
+            correct_user[k].append(correct_of([m], x_user.astype(np.float32), y[va])[0])
     val = {k: hierarchical_bootstrap(c) for k, c in correct.items()}
-    choice = max(val, key=lambda k: val[k].value)  # ties: the first candidate
-    return Recommendation(choice, val, {k: Ensemble(tuple(ms)) for k, ms in members.items()})
+    val_user = {k: hierarchical_bootstrap(c) for k, c in correct_user.items()}
+    choice = max(val_user, key=lambda k: val_user[k].value)  # ties: the first candidate
+    return Recommendation(choice, val, val_user, {k: Ensemble(tuple(ms)) for k, ms in members.items()})
 
 
 def recommend(runner: Runner) -> Recommendation:
@@ -454,7 +463,7 @@ def recommend(runner: Runner) -> Recommendation:
     rec = recommended(runner, cands, seeds)
     dirs = [records.model_dir(runner.dataset, dataclasses.replace(cands[rec.choice], dims="z", seed=s), runner.data_dir,
                               runner.device) for s in seeds]
-    saved.save(runner.data_dir, rec.choice, dirs, rec.val[rec.choice], runner.preset.name)  # study classify's default
+    saved.save(runner.data_dir, rec.choice, dirs, rec.val_user[rec.choice], runner.preset.name)  # study classify's default
     return rec
 
 
@@ -947,7 +956,8 @@ def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
     for name, iv in rec.val.items():
         inputs, training = name.split(", ")  # "positions, exact" (candidates)
         out.setdefault(inputs, {})[training] = Candidate(
-            number(iv, f"validation accuracy under the calibrated observation, {name}"))
+            number(iv, f"validation accuracy under the calibrated observation, {name}"),
+            number(rec.val_user[name], f"validation accuracy as a user's camera gives the throws, {name}"))
     return out  # type: ignore[return-value]
 
 
@@ -956,9 +966,10 @@ def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
 
 
 def _val_table(rec: Recommendation) -> Table:
-    rows = [{"model": n, "val": pct_ci(iv), "chosen": "✓" if n == rec.choice else ""} for n, iv in rec.val.items()]
-    return Table(rows, {"model": "candidate (Z)", "val": "observed validation accuracy, mean over seeds [95 % CI]",
-                        "chosen": "chosen"})
+    rows = [{"model": n, "val": pct_ci(iv), "user": pct_ci(rec.val_user[n]), "chosen": "✓" if n == rec.choice else ""}
+            for n, iv in rec.val.items()]
+    return Table(rows, {"model": "candidate (Z)", "val": "validation, calibrated tracker [95 % CI]",
+                        "user": "validation, a user's camera (chooses) [95 % CI]", "chosen": "chosen"})
 
 
 def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered: int,

@@ -27,7 +27,9 @@ class Candidate(Reported):
     """One candidate model for a camera."""
 
     val: Number
-    """Accuracy on seed 0's validation throws, observed as the tracker observes them."""
+    """Accuracy on the validation throws (mean over seeds), observed as the calibrated tracker observes them."""
+    val_user: Number
+    """The same as a user's own camera, anywhere, gives them (``study.simulate.observe.any_camera``): what chooses."""
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 without ``--model``.
 
 The real-world chapter chooses it (``study.chapters.realworld.recommend``: the Z model with the best mean accuracy
-over seeds on validation throws observed as the tracker sees them) and :func:`save` writes ``recommended.json`` in
+over seeds on validation throws as a user's own camera gives them) and :func:`save` writes ``recommended.json`` in
 the build's data folder: the chosen candidate's name, its seeds' model folders (relative to the data folder, so
 the folder can move), its validation accuracy and the preset. :func:`load` reads it back as one classifier, the
 mean of its seeds' probabilities (``study.learn.trained.Ensemble``).
@@ -35,14 +35,14 @@ class Recommended:
     models: tuple[Path, ...]
     """Its seeds' model folders."""
     val: Interval
-    """Its mean validation accuracy over those seeds, on throws observed as the tracker sees them."""
+    """Its mean validation accuracy over those seeds, on throws as a user's own camera gives them."""
     preset: str
     """The preset of the build that chose it."""
 
     def describe(self) -> str:
         """One line: which model, from which build, how good on validation."""
         return (f"the {self.preset} build's recommended model ({self.name}, {len(self.models)} seeds; "
-                f"{100 * self.val.value:.1f} % on observed validation throws)")
+                f"{100 * self.val.value:.1f} % on validation throws as a user's camera gives them)")
 
 
 def save(data_dir: str | Path, name: str, model_dirs: Sequence[Path], val: Interval, preset: str) -> Path:
