@@ -16,7 +16,7 @@ The pipeline, video by video:
 
 1. the tracker against the rendered ground truth (:func:`tracking_error`) and the scale it read off the
    object's apparent size (:func:`scale_error`);
-2. the model a camera in a car should use, chosen among six candidates (two inputs, three ways of training) on observed validation throws
+2. the model a camera in a car should use, chosen among six candidates (two inputs, three ways of training) on validation throws as a user's camera gives them
    (:func:`recommend`);
 3. Table 1's Z model (and the recommended one, where it differs) on every video, per class with Wilson
    intervals beside the paper's 93 % and 100 % (``study.runs.paper.REAL_WORLD``), every candidate's
@@ -385,7 +385,7 @@ def heights(model: Model, group: Literal["rendered", "real"], videos: Sequence[V
 
 @dataclass(frozen=True)
 class Recommendation:
-    """The Z model a camera in a car should use (:func:`recommend`), chosen on observed validation throws by the
+    """The Z model a camera in a car should use (:func:`recommend`), chosen on validation throws as a user's camera gives them, by the
     mean over seeds."""
 
     choice: str
