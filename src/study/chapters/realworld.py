@@ -385,8 +385,8 @@ def heights(model: Model, group: Literal["rendered", "real"], videos: Sequence[V
 
 @dataclass(frozen=True)
 class Recommendation:
-    """The Z model a camera in a car should use (:func:`recommend`), chosen on validation throws as a user's camera gives them, by the
-    mean over seeds."""
+    """The Z model a camera in a car should use (:func:`recommend`), chosen on validation throws as a user's camera
+    gives them, by the mean over seeds."""
 
     choice: str
     """The chosen candidate's name (``"positions, exact"`` and so on, :func:`candidates`): the best on
