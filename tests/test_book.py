@@ -446,12 +446,12 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
 
     built = results.load(tmp_path / results.FILE)  # refuses a stored verdict its inputs do not decide
     readme = tmp_path / "README-copy.md"  # the README's findings, written from this build's results
-    readme.write_text("before\n<!-- findings: begin -->\nold\n<!-- findings: end -->\nafter\n")
+    readme.write_text("before\n<!-- findings: begin -->\nSTALE-BLOCK\n<!-- findings: end -->\nafter\n")
     script = [sys.executable, str(REPO / "scripts" / "readme_findings.py"), str(tmp_path / results.FILE)]
     assert subprocess.run([*script, "--commit", "abc1234", "--write", str(readme)], timeout=120).returncode == 0
     text = readme.read_text()
     assert text.startswith("before\n<!-- findings: begin -->") and text.endswith("<!-- findings: end -->\nafter\n")
-    assert "`abc1234`" in text and "| Table 1, Z only | 78 % |" in text and "old" not in text
+    assert "`abc1234`" in text and "| Table 1, Z only | 78 % |" in text and "STALE-BLOCK" not in text
     decided = [n for n in built.values() if n.verdict]
     assert len(decided) >= 15 and results.recompute(built) == [], "every verdict follows from its stored inputs"
     page = summary.compute(tmp_path / results.FILE, "smoke")  # the summary page's rows, read as typed results

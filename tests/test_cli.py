@@ -92,7 +92,8 @@ def test_a_failed_model_is_reported_by_train_and_classify(tmp_path, dataset_file
     captured = capsys.readouterr()
     assert rc == 0 and json.loads(captured.out)["failed"] is True
     warning = [ln for ln in captured.err.splitlines() if ln.startswith("study: warning: ")]
-    assert len(warning) == 1 and "failed to train" in warning[0] and "--seed" in warning[0]
+    assert len(warning) == 2 and "failed to train" in warning[0] and "--seed" in warning[0]
+    assert "training throws a class" in warning[1] and "--train-per-class 200" in warning[1], "how many it needs"
     assert json.loads((out / "meta.json").read_text())["failed"] is True
     csv = tmp_path / "t.csv"
     csv.write_text("frame,t_s,u_px,v_px,height_m,status,segment,confidence\n"
