@@ -95,6 +95,9 @@ def test_xyz_model_refused(rendered_set):
 def test_manifest_errors(tmp_path):
     with pytest.raises(DataError, match="no such folder"):
         realworld.read_manifest(tmp_path / "nope")
+    (tmp_path / "list.csv").write_text("file,label\n")
+    with pytest.raises(DataError, match="is a file; give the folder"):  # said "no such folder" before
+        realworld.read_manifest(tmp_path / "list.csv")
     with pytest.raises(DataError, match="MANIFEST.csv"):
         realworld.read_manifest(tmp_path)
     (tmp_path / "MANIFEST.csv").write_text("file,label\na.mp4,bouncy\n")
