@@ -365,12 +365,14 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         "classify",
         help="say whether a tracked object is light (bouncy) or heavy (sliding)",
         description=(
-            "Classify one throw with a trained model (a directory written by the training step; without "
-            "--model, the one the last book build in the data folder recommends). "
-            "INPUT is a video (tracked first, as 'study track' does) or a trajectory CSV from "
-            "'study track --out'. The longest piece of the track is resampled to the model's frame "
-            "rate and cut or zero-padded to its input length; a single camera gives only the height, "
-            "so x and y are zero. Prints the class and its probability."
+            "Say whether a thrown object is light (bounces: safe to pass) or heavy (slides: must avoid) "
+            "from a video of it, with no camera calibration: the object's colour and size are enough. "
+            "VIDEO_OR_CSV is a video (tracked as 'study track' does, its heights in metres from the object's "
+            "mean apparent size) or a trajectory CSV from 'study track --out'; --manifest FILE does every "
+            "video of a folder. The model: --model DIR (from 'study train'), else the one the last book "
+            "build in the data folder recommends. The longest piece of the track is resampled to the "
+            "model's frame rate and cut or zero-padded to its input length. Prints the class, its "
+            "probability, and what it assumed (the scale, the ground, the frames read)."
         ),
     )
     p.add_argument("input", type=Path, metavar="VIDEO_OR_CSV", nargs="?",
