@@ -20,9 +20,10 @@ from pathlib import Path
 import numpy as np
 
 from study.core.errors import StudyError
+from study.methods import camera_cost
 from study.see import ground, render, track
 from study.see.config import TrackConfig
-from study.see.scale import ObjectShape, read_scale
+from study.see.scale import ObjectShape
 
 
 def dlt(world: np.ndarray, pixels: np.ndarray) -> np.ndarray:
@@ -72,8 +73,7 @@ def main() -> None:
         except StudyError as e:
             failed[fam] = failed.get(fam, 0) + 1
             print(f"{r['file']}: ground points failed: {e}")
-        size = float(r["object_size"])
-        scaled = track.set_scale(px, metres_per_pixel=read_scale(px, ObjectShape("sphere", (size,)), "mean").metres_per_pixel)
+        scaled = camera_cost.SCALE[camera_cost.DEFAULT_PATH](px, ObjectShape("sphere", (float(r["object_size"]),)))
         h = np.where(scaled.status > 0, scaled.height, np.nan)[:n] + rest
         err[fam]["mean"].append(h - truth["z"][:n])
     print("family clips | ground points: RMS median removed, raw (mm), failed | mean silhouette: the same")
@@ -89,9 +89,9 @@ def main() -> None:
 
 
 def _rms(errors: list[np.ndarray]) -> tuple[str, str]:
-    centred = np.concatenate([x - np.nanmedian(x) for x in errors]) if errors else np.array([np.nan])
-    raw = np.concatenate(errors) if errors else np.array([np.nan])
-    return f"{1000 * np.sqrt(np.nanmean(centred**2)):.0f}", f"{1000 * np.sqrt(np.nanmean(raw**2)):.0f}"
+    """(median removed, raw) RMS of several clips' height errors, mm, as printed (``camera_cost.rms_mm``)."""
+    raw, centred = camera_cost.rms_mm([e[np.isfinite(e)] for e in errors])
+    return f"{centred:.0f}", f"{raw:.0f}"
 
 
 if __name__ == "__main__":

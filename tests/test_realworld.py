@@ -118,20 +118,11 @@ def test_the_chapter_reads_a_folder_of_two_colours_and_answers_each_clip(rendere
     import csv
     import shutil
 
-    import cv2
+    from video_toys import recoloured
 
     light = rendered_set[0]
     shutil.copy(light.path, tmp_path / "orange.mp4")
-    cap = cv2.VideoCapture(str(light.path))
-    frames = []
-    ok, f = cap.read()
-    while ok:
-        frames.append(f[:, :, ::-1].copy())  # red and blue swapped: the orange box turns blue
-        ok, f = cap.read()
-    w = cv2.VideoWriter(str(tmp_path / "blue.mp4"), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, frames[0].shape[1::-1])
-    for f in frames:
-        w.write(f)
-    w.release()
+    recoloured(light.path, tmp_path / "blue.mp4")
     size = light.object_size
     (tmp_path / "MANIFEST.csv").write_text(f"file,label,color,object_size\norange.mp4,light,orange,{size}\n"
                                            f"blue.mp4,?,90 120 60 130 255 255,{size}\n")

@@ -8,6 +8,7 @@ import shutil
 
 import cv2
 import model_toys
+from video_toys import recoloured
 import numpy as np
 import pytest
 
@@ -257,26 +258,12 @@ def test_cli_classify_video_and_csv(rendered, tmp_path, z_model, capsys):
     assert rc == 0 and "(p = " in capsys.readouterr().out
 
 
-def _recoloured(src: Path, out: Path) -> Path:
-    """A copy of the video ``src`` with its red and blue channels swapped: the orange box turns blue."""
-    cap = cv2.VideoCapture(str(src))
-    fps, size = cap.get(cv2.CAP_PROP_FPS), (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
-    w = cv2.VideoWriter(str(out), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
-    ok, frame = cap.read()
-    while ok:
-        w.write(frame[:, :, ::-1].copy())
-        ok, frame = cap.read()
-    cap.release()
-    w.release()
-    return out
-
-
 def test_cli_classifies_a_manifest_of_two_colours_and_writes_the_answers(rendered, tmp_path, z_model, capsys):
     folder, tm = z_model
     mine = tmp_path / "mine"
     mine.mkdir()
     shutil.copy(rendered.video, mine / "orange.mp4")
-    _recoloured(rendered.video, mine / "blue.mp4")
+    recoloured(rendered.video, mine / "blue.mp4")
     (mine / "lost.mp4").write_bytes(b"not a video")
     (mine / "MANIFEST.csv").write_text("file,label,color,object_size,object_shape\n"
                                        "orange.mp4,light,orange,0.2,box\n"

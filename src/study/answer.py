@@ -8,7 +8,7 @@ The :class:`Answer` says what it assumed, so a wrong scale is never silent.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +17,7 @@ from study import CLASSES
 from study.core.errors import ConfigError, ModelError
 from study.learn.trained import Ensemble, TrainedModel
 from study.learn.trained import load as load_model
+from study.report.text import Table
 from study.see import track
 from study.see.config import TrackConfig
 from study.see.scale import DEFAULT, ObjectShape, read_scale
@@ -50,6 +51,8 @@ class Answer:
     """What the answer rests on: the scale and where it came from, the ground, the frames read."""
     trajectory: Trajectory
     """The track, in metres, as classified."""
+    warnings: tuple[str, ...] = ()
+    """What makes the answer doubtful: each seed of the model that failed to train (its answers near chance)."""
 
     def __str__(self) -> str:
         return f"{self.source}: {self.label} (p = {self.p:.3f}; {self.model})\n  assumed: {self.assumed}"
@@ -86,7 +89,7 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
     ``data_dir`` recommends. The scale: ``metres_per_pixel`` if you measured it, else read off ``object_shape``
     as ``scale_from`` says ('mean': its mean apparent size; 'rest'; 'gravity'). ``rest_height``: the centre's
     height at rest, metres (default: the shape's). Raises ``ModelError`` for a model that does not read heights
-    only, ``ConfigError`` for a pixel track with nothing to scale it by, ``TrackingError`` / ``GeometryError`` /
+    only, ``ConfigError`` for a track in pixels with nothing to scale it by, ``TrackingError`` / ``GeometryError`` /
     ``VideoError`` naming the file and what to do.
 
     Example::
@@ -96,42 +99,50 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
         print(answer.label, answer.p, answer.assumed)
     """
     m, which = _model(model, data_dir)
-    members = list(m.members) if isinstance(m, Ensemble) else [m]
+    return _answer(source, m, which, track_config, object_shape, scale_from, metres_per_pixel, rest_height)
+
+
+def in_metres(traj: Trajectory, object_shape: ObjectShape | None, scale_from: str = DEFAULT,
+              metres_per_pixel: float | None = None) -> tuple[Trajectory, str]:
+    """``traj`` (a track in pixels, or one already in metres) with heights in metres, and what scale it assumed:
+    ``metres_per_pixel`` if given, else its own if it is in metres, else read off ``object_shape`` as
+    ``scale_from`` says (``study.see.scale.read_scale``). Raises ``ConfigError`` for pixels with nothing to scale
+    them by."""
+    if metres_per_pixel is not None:
+        scaled = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=metres_per_pixel)
+        return scaled, f"scale {metres_per_pixel * 1000:.2f} mm/px as given"
+    if traj.units == "m":
+        return traj, f"heights as the track holds them ({traj.height_per_pixel * 1000:.2f} mm/px)"
+    if object_shape is None:
+        raise ConfigError(f"{traj.source}: heights are in pixels; give the object's size (--object-size D, metres) or "
+                          "--metres-per-pixel, so the model sees metres")
+    read = read_scale(traj, object_shape, scale_from)
+    return track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=read.metres_per_pixel), read.note()
+
+
+def _answer(source: str | Path, m: TrainedModel | Ensemble, which: str, track_config: TrackConfig | None,
+            object_shape: ObjectShape | None, scale_from: str, metres_per_pixel: float | None,
+            rest_height: float | None) -> Answer:
+    """:func:`classify` with the model loaded (``which`` names it)."""
     if m.dims != "z":
         raise ModelError(f"{which} was trained on {m.dims!r}; one camera gives only the height: use a model trained "
                          "on 'z' (the paper's real-world test does)")
     path = Path(source)
-    if path.suffix.lower() == ".csv":
-        traj = track.read_csv(path)
-        if metres_per_pixel is not None:
-            traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=metres_per_pixel)
-            scale = f"scale {metres_per_pixel * 1000:.2f} mm/px as given"
-        elif traj.units != "m" and object_shape is not None:  # `study track` without --object-size wrote pixels
-            read = read_scale(traj, object_shape, scale_from)
-            traj = track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=read.metres_per_pixel)
-            scale = read.note()
-        elif traj.units != "m":
-            raise ConfigError(f"trajectory CSV {path}: heights are in pixels; give the object's size (--object-size "
-                              "D, metres) or --metres-per-pixel, so the model sees metres")
-        else:
-            scale = f"heights as the CSV holds them ({traj.height_per_pixel * 1000:.2f} mm/px)"
-    else:
-        traj = track.track_video(path, track_config or TrackConfig(), shape=object_shape, scale_from=scale_from,
-                                 metres_per_pixel=metres_per_pixel)
-        scale = (f"scale {metres_per_pixel * 1000:.2f} mm/px as given" if metres_per_pixel is not None
-                 else read_scale(traj, object_shape, scale_from).note() if object_shape is not None
-                 else "scale from the object's size at rest")
+    pixels = (track.read_csv(path) if path.suffix.lower() == ".csv" else
+              track.track_video(path, track_config or TrackConfig()))  # pixels: scaled once, below
+    traj, scale = in_metres(pixels, object_shape, scale_from, metres_per_pixel)
     rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0
     x = track.to_model_input(traj, m.fps, m.n_frames, rest_height=rest)
     p = m.predict_proba(x[None])[0]
     k = int(p.argmax())
     piece = traj.longest()
-    failed = [mm.failure() for mm in members if mm.failed]
+    members = m.members if isinstance(m, Ensemble) else (m,)
     assumed = (f"{scale}; the ground at the lowest centre (row {traj.ground_v:.0f}), one scale for the whole video "
                f"(the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m up at rest; "
                f"read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames found, "
-               f"{len(traj.segments())} piece(s)" + (f"; {failed[0]}: its answers are near chance" if failed else ""))
-    return Answer(str(source), CLASSES[k], float(p[k]), float(p[1]), which, assumed, traj)
+               f"{len(traj.segments())} piece(s)")
+    warnings = tuple(f"{which}: {mm.failure()}; its answers are near chance" for mm in members if mm.failed)
+    return Answer(str(source), CLASSES[k], float(p[k]), float(p[1]), which, assumed, traj, warnings)
 
 
 CSV_COLUMNS = ["file", "true", "label", "p", "p_heavy", "correct", "assumed", "error"]
@@ -192,9 +203,13 @@ def classify_manifest(manifest: str | Path, model: str | Path | TrainedModel | E
     out = []
     for v in read_manifest(manifest_folder(manifest), color=color, object_size=object_size):
         try:
-            ans = classify(v.path, m, track_config=v.track_config(), object_shape=v.object_shape(),
-                           scale_from=scale_from, rest_height=v.rest_height)
-            out.append(FolderAnswer(v.path.name, v.label, replace(ans, model=which)))
+            ans = _answer(v.path, m, which, v.track_config(), v.object_shape(), scale_from, None, v.rest_height)
+            out.append(FolderAnswer(v.path.name, v.label, ans))
         except StudyError as e:
             out.append(FolderAnswer(v.path.name, v.label, None, str(e)))
     return out
+
+
+def write_answers(rows: list[FolderAnswer], path: str | Path) -> Path:
+    """``rows`` as a CSV at ``path`` (:data:`CSV_COLUMNS`, one row a video; written atomically)."""
+    return Table([r.row() for r in rows], {c: c for c in CSV_COLUMNS}).write_csv(path)

@@ -275,11 +275,9 @@ def _add_object_options(p: argparse.ArgumentParser, size_default: float | None) 
 
 def _object_shape(a: argparse.Namespace):
     """The ``ObjectShape`` the object options ask for, or None without --object-size."""
-    from study.see.scale import ObjectShape
+    from study.answer import shape
 
-    if not a.object_size:
-        return None
-    return ObjectShape("sphere" if a.object_shape == "ball" else a.object_shape, tuple(a.object_size))
+    return shape(tuple(a.object_size), a.object_shape) if a.object_size else None
 
 
 def _track_config(a: argparse.Namespace):
@@ -408,8 +406,8 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         ans = answer.classify(a.input, a.model, track_config=_track_config(a), object_shape=_object_shape(a),
                               scale_from=a.scale_from, metres_per_pixel=a.metres_per_pixel,
                               rest_height=a.rest_height, data_dir=a.data_dir)
-        if "near chance" in ans.assumed:
-            _warn(ans.assumed.rsplit("; ", 1)[-1])
+        for w in ans.warnings:
+            _warn(w)
         print(ans)
         return 0
 
@@ -418,16 +416,14 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
 
 def _classify_manifest(a: argparse.Namespace) -> int:
     """``study classify --manifest``: every video of the manifest, one line each, then the tally."""
-    import csv
-    import io
-
     from study import answer
-    from study.core import cache
 
     if a.out is not None:
         check_writable(a.out, "answers CSV")  # before the tracking, not after it
     rows = answer.classify_manifest(a.manifest, a.model, color=a.color, object_size=a.object_size[0],
                                     scale_from=a.scale_from, data_dir=a.data_dir)
+    for w in next((r.answer.warnings for r in rows if r.answer), ()):  # one model answered them all
+        _warn(w)
     for r in rows:
         got = (f"{r.answer.label} (p = {r.answer.p:.3f})" if r.answer else f"not classified: {r.error}")
         mark = {True: "  right", False: "  wrong", None: ""}[r.correct]
@@ -437,12 +433,7 @@ def _classify_manifest(a: argparse.Namespace) -> int:
           + (f", {sum(known)} of {len(known)} labelled ones right" if known else "")
           + (f"; model: {rows[0].answer.model}" if rows and rows[0].answer else ""))
     if a.out is not None:
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=answer.CSV_COLUMNS, lineterminator="\n")
-        w.writeheader()
-        w.writerows(r.row() for r in rows)
-        cache.write_text_atomic(a.out, buf.getvalue())
-        print(f"answers written to {a.out}")
+        print(f"answers written to {answer.write_answers(rows, a.out)}")
     return 0
 
 

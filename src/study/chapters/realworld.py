@@ -16,7 +16,8 @@ The pipeline, video by video:
 
 1. the tracker against the rendered ground truth (:func:`tracking_error`) and the scale it read off the
    object's apparent size (:func:`scale_error`);
-2. the model a camera in a car should use, chosen among six candidates (two inputs, three ways of training) on validation throws as a user's camera gives them
+2. the model a camera in a car should use, chosen among six candidates (two inputs, three ways of training) on
+   validation throws as a user's camera gives them
    (:func:`recommend`);
 3. Table 1's Z model (and the recommended one, where it differs) on every video, per class with Wilson
    intervals beside the paper's 93 % and 100 % (``study.runs.paper.REAL_WORLD``), every candidate's
@@ -34,7 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal, Protocol
 
@@ -79,7 +80,6 @@ from study.runs import paper, records
 from study.runs import recommended as saved
 from study.runs.stats import correct_of
 from study.see import render, scale, track, video
-from study.see.scale import ObjectShape
 from study.simulate import measure, observe
 
 if TYPE_CHECKING:
@@ -113,43 +113,36 @@ class Tracked:
     """Why the video could not be tracked ('' when it was)."""
 
 
-def _track_each(videos: Sequence[Video], track_one: Callable[[Video, track.TrackConfig], track.Trajectory],
-                desc: str, progress: bool) -> dict[str, Tracked]:
-    """File name -> :class:`Tracked`: each video through ``track_one`` with the tracker set to its colour, or why it
-    could not be tracked."""
+def _as_a_user(v: Video, cfg: track.TrackConfig) -> track.Trajectory:
+    """``v`` as ``study classify VIDEO --color C --object-size D`` tracks it: no camera, no ground truth; the scale
+    read the default way (``study.see.scale.DEFAULT``) off the video's object."""
+    return track.track_video(v.path, cfg, shape=v.object_shape(), scale_from=scale.DEFAULT)
+
+
+def track_all(videos: Sequence[Video], progress: bool = True) -> dict[str, Tracked]:
+    """Track every video: file name -> :class:`Tracked` (or why it could not be tracked). A rendered throw's heights
+    come from the render's camera at the object's depth (``study.methods.tracker.track_rendered``); a real clip's,
+    whose camera is unknown, as a user's would (``study classify``'s path)."""
     out: dict[str, Tracked] = {}
-    with Progress(desc, total=len(videos), show=progress, unit="video") as bar:
+    with Progress("track videos", total=len(videos), show=progress, unit="video") as bar:
         for v in videos:
             try:
-                out[v.path.name] = Tracked(track_one(v, v.track_config()))
+                cfg = v.track_config()
+                out[v.path.name] = Tracked(tracker.track_rendered(v, cfg) if v.truth is not None else
+                                           _as_a_user(v, cfg))
             except StudyError as e:
                 out[v.path.name] = Tracked(None, str(e))
             bar.update()
     return out
 
 
-def _as_a_user(v: Video, cfg: track.TrackConfig, shape: ObjectShape | None = None) -> track.Trajectory:
-    """``v`` as ``study classify VIDEO --color C --object-size D`` tracks it: no camera, no ground truth; the scale
-    read the default way (``study.see.scale.DEFAULT``) off an object of ``shape`` (None: a ball of the video's
-    ``object_size``)."""
-    return track.track_video(v.path, cfg, shape=shape or v.object_shape(),
-                             scale_from=scale.DEFAULT)
-
-
-def track_all(videos: Sequence[Video], progress: bool = True) -> dict[str, Tracked]:
-    """Track every video: file name -> :class:`Tracked`. A rendered throw's heights come from the render's camera at
-    the object's depth (``study.methods.tracker.track_rendered``); a real clip's, whose camera is unknown, as a
-    user's would (:func:`user_tracks`: ``study classify``'s path)."""
-    return _track_each(videos, lambda v, cfg: tracker.track_rendered(v, cfg) if v.truth is not None else
-                       _as_a_user(v, cfg), "track videos", progress)
-
-
-def user_tracks(videos: Sequence[Video], shape: ObjectShape | None = None,
-                progress: bool = True) -> dict[str, Tracked]:
-    """Every video tracked as ``study classify VIDEO --color C --object-size D`` tracks it, rendered or not: no
-    camera, no ground truth; the scale read the default way off an object of ``shape`` (None: a ball of each
-    video's ``object_size``)."""
-    return _track_each(videos, lambda v, cfg: _as_a_user(v, cfg, shape), "track videos (user's path)", progress)
+def user_tracks(videos: Sequence[Video], heights: Sequence[camera_cost.Heights]) -> dict[str, Tracked]:
+    """Every rendered video as ``study classify VIDEO --color C --object-size D`` tracks it (no camera, no ground
+    truth): the default path's track of its :func:`study.methods.camera_cost.video_heights`, ``heights``, which
+    tracked it once for every path."""
+    path = camera_cost.DEFAULT_PATH
+    return {v.path.name: Tracked(h.tracks[path]) if path in h.tracks else Tracked(None, str(h.paths[path]))
+            for v, h in zip(videos, heights)}
 
 
 def truth_tracks(videos: Sequence[Video]) -> dict[str, Tracked]:
@@ -440,12 +433,13 @@ def recommended(runner: Runner, cands: dict[str, TrainConfig], seeds: Sequence[i
     for seed in seeds:
         _, va = train.split_train_val(len(y), first.val_fraction, seed)
         x_val = ob.observe(runner.dataset.train.x[va, :T], runner.fps, seed=6)
-        x_user = observe.any_camera(runner.dataset.train.x[va, :T], runner.fps, np.random.default_rng([seed, 7]))
+        x_user = observe.any_camera(runner.dataset.train.x[va, :T], runner.fps,
+                                    np.random.default_rng([seed, 7])).astype(np.float32)
         for k, c in cands.items():
             m = runner.trained(dataclasses.replace(c, dims="z", seed=seed))
             members[k].append(m)
             correct[k].append(correct_of([m], x_val, y[va])[0])
-            correct_user[k].append(correct_of([m], x_user.astype(np.float32), y[va])[0])
+            correct_user[k].append(correct_of([m], x_user, y[va])[0])
     val = {k: hierarchical_bootstrap(c) for k, c in correct.items()}
     val_user = {k: hierarchical_bootstrap(c) for k, c in correct_user.items()}
     choice = max(val_user, key=lambda k: val_user[k].value)  # ties: the first candidate
@@ -893,8 +887,9 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
     labels = {key: (classify(m, rendered, tracks_r, progress=False), classify(m, real, tracks_q, progress=False))
               for key, (_, m) in models.items()}
     shape = camera_cost.shape_of(runner.synth_config)
-    tracks_u = user_tracks(rendered, shape, progress=False)
-    render_heights = camera_cost.height_errors([camera_cost.video_heights(v, shape) for v in rendered])
+    on_renders = [camera_cost.video_heights(v, shape) for v in rendered]  # each tracked once, read every way
+    tracks_u = user_tracks(rendered, on_renders)
+    render_heights = camera_cost.height_errors(on_renders)
     user = {key: classify(m, rendered, tracks_u, progress=False) for key, (_, m) in models.items()}
     tracks_x = truth_tracks(rendered)
     exact = {key: classify(m, rendered, tracks_x, progress=False) for key, (_, m) in models.items()}

@@ -87,7 +87,8 @@ def epoch_inputs(x: np.ndarray, tr: np.ndarray, va: np.ndarray, cfg: TrainConfig
             fps: float) -> tuple[Callable[[int], torch.Tensor], np.ndarray]:
     """The training part's positions for each epoch (a function of the epoch) and the validation part's, from
     the first frames ``x`` (n, T, 3): exact positions; (``'randomised'``) observed by a random camera, eight
-    views cycled; (``'any-camera'``) filmed by cameras anywhere and read by one scale, eight views cycled; or (``'fixed'``) observed with the config's tracker error, drawn afresh every epoch. With
+    views cycled; (``'any-camera'``) filmed by cameras anywhere and read by one scale, eight views cycled; or
+    (``'fixed'``) observed with the config's tracker error, drawn afresh every epoch. With
     ``cfg.rotate``, each epoch's training positions, once observed, are turned about the vertical
     (:func:`rotating`); the validation part is left as it was thrown."""
     view, x_val = _observed_inputs(x, tr, va, cfg, fps)

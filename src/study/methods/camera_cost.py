@@ -182,7 +182,7 @@ def _errors(h: Heights, path: str) -> np.ndarray:
     return np.array([]) if isinstance(got, str) else (got - h.exact)[np.isfinite(got)]
 
 
-def _rms_mm(errors: Sequence[np.ndarray]) -> tuple[float, float]:
+def rms_mm(errors: Sequence[np.ndarray]) -> tuple[float, float]:
     """(root-mean-square over every frame, the same after removing each video's median error), millimetres, of
     several videos' height errors (NaN for none)."""
     e = [x for x in errors if len(x)]
@@ -193,8 +193,8 @@ def _rms_mm(errors: Sequence[np.ndarray]) -> tuple[float, float]:
 
 
 def height_errors(tracked: Sequence[Heights]) -> dict[str, tuple[float, float]]:
-    """Each path's height error over ``tracked`` videos: path -> :func:`_rms_mm` (raw, median removed), mm."""
-    return {k: _rms_mm([_errors(h, k) for h in tracked]) for k in PATHS}
+    """Each path's height error over ``tracked`` videos: path -> :func:`rms_mm` (raw, median removed), mm."""
+    return {k: rms_mm([_errors(h, k) for h in tracked]) for k in PATHS}
 
 
 @dataclass(frozen=True)
@@ -277,7 +277,7 @@ def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]
         sel = np.array([g in ("all", f) for f in fams])
         out[g] = {}
         for k in x:
-            raw, centred = _rms_mm([errors[k][i] for i in np.flatnonzero(sel)])
+            raw, centred = rms_mm([errors[k][i] for i in np.flatnonzero(sel)])
             out[g][k] = PathResult(
                 bootstrap_accuracy(correct[k][:, sel]),
                 None if k == "exact" else bootstrap_difference(correct["exact"][:, sel], correct[k][:, sel]),

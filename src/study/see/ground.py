@@ -6,8 +6,8 @@ and the principal point at the image centre it gives the focal length and the ca
 :func:`camera_from_floor`). The object moves in one vertical plane (a throw's horizontal path is a line): the frames
 in which it touches the ground put its centre on the horizontal plane ``rest_height`` up, so their rays meet that
 plane on the path's line, and every other frame's ray meets it farther from the camera (the object is above it).
-The line is the one most of those points lie on with almost none nearer the camera (:func:`path_line`); each
-frame's height is where its ray crosses the vertical plane through that line (:func:`heights`).
+The line is an edge of those points' convex hull that faces the camera: the one whose heights fall at g in flight
+(:func:`path_line`); each frame's height is where its ray crosses the vertical plane through it (:func:`heights`).
 
 **Measured, and not on a user's path.** On throws that stay in their plane it gives the heights to a centimetre
 with a pixel's error in the clicks (``tests/test_ground.py``). The study's throws do not stay in it: a tumbling box
@@ -26,7 +26,7 @@ import numpy as np
 
 from study.core.errors import ConfigError
 from study.see.camera import Camera
-from study.see.geometry import GeometryError
+from study.see.geometry import G, GeometryError, _runs
 
 DEFAULT_FOVY = 60.0
 """Vertical field of view assumed, degrees, when the floor points cannot fix the focal length (a camera that looks
@@ -81,10 +81,6 @@ def _on_plane(camera: Camera, u: np.ndarray, v: np.ndarray, z: float) -> np.ndar
     return c + s[:, None] * d
 
 
-G = 9.81
-"""Gravity, m/s^2: the free flights' fall picks the throw's plane among the candidates (:func:`path_line`)."""
-
-
 def _candidates(camera: Camera, u: np.ndarray, v: np.ndarray, rest_height: float,
                 tol: float) -> list[tuple[int, np.ndarray, np.ndarray]]:
     """The lines on the floor the throw's path may follow, most ground frames first: (frames within ``tol`` of it, a
@@ -133,19 +129,11 @@ def gravity_misfit(t: np.ndarray, z: np.ndarray, rest_height: float, min_frames:
     mean of |fitted vertical acceleration + g| / g over every run of ``min_frames`` or more frames 3 cm above
     ``rest_height``; NaN without one."""
     up = np.isfinite(z) & (z > rest_height + 0.03)
-    errs, weights = [], []
-    start = None
-    for k, flag in enumerate(np.append(up, False)):
-        if flag and start is None:
-            start = k
-        elif not flag and start is not None:
-            if k - start >= min_frames:
-                seg = slice(start, k)
-                acc = 2 * np.polyfit(t[seg] - t[seg].mean(), z[seg], 2)[0]
-                errs.append(abs(acc + G) / G)
-                weights.append(k - start)
-            start = None
-    return float(np.average(errs, weights=weights)) if errs else math.nan
+    runs = [r for r in _runs(up) if len(r) >= min_frames]
+    if not runs:
+        return math.nan
+    acc = [2 * np.polyfit(t[r] - t[r].mean(), z[r], 2)[0] for r in runs]
+    return float(np.average([abs(a + G) / G for a in acc], weights=[len(r) for r in runs]))
 
 
 def path_line(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_height: float,
