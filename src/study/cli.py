@@ -24,11 +24,11 @@ def _plain(doc: str) -> str:
     return re.sub(r":\w+:`~?([^`]*)`", r"\1", doc).replace("``", "'").replace("%", "%%")
 
 
-def _add_fields(p: argparse.ArgumentParser, cls: type, names: Sequence[str], *, flags: dict[str, str] | None = None,
+def _add_fields(p: argparse.ArgumentParser, cls: type, names: Sequence[str], *,
                 choices: dict[str, Sequence[str]] | None = None) -> None:
     """One option per field of the config dataclass ``cls``, its default, type, choices and help taken from the
-    field itself (its docstring is the help, its ``Literal`` type the choices), so the command line cannot
-    drift from the config."""
+    field itself (its docstring is the help, its ``Literal`` type the choices, its name the flag), so the command
+    line cannot drift from the config."""
     from study.learn.config import choices as literal_choices  # no torch
 
     fields = {f.name: f for f in dataclasses.fields(cls)}
@@ -38,8 +38,7 @@ def _add_fields(p: argparse.ArgumentParser, cls: type, names: Sequence[str], *, 
         default = fields[name].default
         help_text = _plain(docs[name]) + " (default: %(default)s)"
         extra = {"choices": allowed[name]} if name in allowed else {}
-        flag = (flags or {}).get(name, "--" + name.replace("_", "-"))
-        p.add_argument(flag, dest=name, type=type(default), default=default, help=help_text, **extra)
+        p.add_argument("--" + name.replace("_", "-"), dest=name, type=type(default), default=default, help=help_text, **extra)
 
 
 def _add_preset(p: argparse.ArgumentParser, what: str) -> None:
@@ -196,7 +195,7 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--data", type=Path, required=True, help="dataset file (.npz) written by `study synth`")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="model directory to write (replaced if it exists)")
-    _add_fields(p, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig)], flags={"epochs": "--epochs"})
+    _add_fields(p, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig)])
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
@@ -398,7 +397,8 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         from study.core.errors import ConfigError
 
         if (a.input is None) == (a.manifest is None):
-            raise ConfigError("give a video or CSV to classify, or --manifest FILE for a folder of them (one of the two)")
+            raise ConfigError("give a video or CSV to classify, or --manifest FILE for a folder of them "
+                              "(one of the two)")
         if a.manifest is not None:
             return _classify_manifest(a)
         if a.out is not None:

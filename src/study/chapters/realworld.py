@@ -457,7 +457,8 @@ def recommend(runner: Runner) -> Recommendation:
     rec = recommended(runner, cands, seeds)
     dirs = [records.model_dir(runner.dataset, dataclasses.replace(cands[rec.choice], dims="z", seed=s), runner.data_dir,
                               runner.device) for s in seeds]
-    saved.save(runner.data_dir, rec.choice, dirs, rec.val_user[rec.choice], runner.preset.name)  # study classify's default
+    # study classify's default model
+    saved.save(runner.data_dir, rec.choice, dirs, rec.val_user[rec.choice], runner.preset.name)
     return rec
 
 
