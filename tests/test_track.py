@@ -287,6 +287,14 @@ def test_cli_classifies_a_manifest_of_two_colours_and_writes_the_answers(rendere
     assert rc == 2 and "orange.mp4: color 'purple' is unknown" in capsys.readouterr().err
 
 
+def test_a_video_with_neither_a_size_nor_a_scale_is_refused_not_read_in_pixels(rendered, z_model):
+    from study import answer
+
+    folder, _ = z_model
+    with pytest.raises(ConfigError, match="heights are in pixels; give the object's size"):
+        answer.classify(rendered.video, folder, track_config=FAST, object_shape=None)
+
+
 def test_cli_classify_rejects_xyz_model(rendered, tmp_path, capsys):
     cfg = train.TrainConfig(dims="xyz", length=0.5, hidden=4, epochs=1, batch_size=8, truncation=5)
     folder = train.fit(model_toys.dataset(n=8, T=15), cfg, progress=False).save(tmp_path / "xyz")
