@@ -31,18 +31,33 @@ from pathlib import Path
 import numpy as np
 
 from study.book import results
+from study.learn.config import RENAMED as CONFIG_RENAMED
 from study.report.reported import Number
 
 SOURCE_DATASET_KEYS = ("data_key", "data")
 """Names under which a number's source gives the key of a data set (which hashes the simulation's code): skipped."""
-TIMING = ("time.",)
-"""Names of numbers that are wall-clock times: listed, never compared."""
+TIMING = ("time.", "render_cpu_s")
+"""Names of numbers that are times (wall clock or CPU): listed, never compared."""
 RECORD_SKIP = ("key", "data_key", "train_seconds", "cpu_seconds")
 """Fields of a run record that hash code or time it, not what it computed."""
 
 
 def _canon(obj) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"))
+
+
+def _today(obj):
+    """``obj`` with every training config's fields under today's names (``max_epochs`` -> ``epochs``:
+    ``study.learn.config.RENAMED``), so that a build from before a rename pairs with one after it."""
+    if isinstance(obj, dict):
+        return {k: (_renamed_config(v) if k == "config" and isinstance(v, dict) else _today(v)) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_today(v) for v in obj]
+    return obj
+
+
+def _renamed_config(cfg: dict) -> dict:
+    return {CONFIG_RENAMED.get(k, k): _today(v) for k, v in cfg.items()}
 
 
 def dataset_identity(data_dir: Path, key: str) -> str | None:
@@ -62,7 +77,7 @@ def records(data_dir: Path) -> dict[str, list[dict]]:
     identities: dict[str, str | None] = {}
     out: dict[str, list[dict]] = defaultdict(list)
     for f in sorted((data_dir / "runs").glob("*.json")):
-        rec = json.loads(f.read_text())
+        rec = _today(json.loads(f.read_text()))
         k = rec["data_key"]
         if k not in identities:
             identities[k] = dataset_identity(data_dir, k)
@@ -77,7 +92,7 @@ def _leaf(leaf) -> dict:
     (``signed``) and the dataset key its source names (which hashes the simulation's code)."""
     out = {"what": leaf.what, "verdict": leaf.verdict,
            "decision": None if leaf.decision is None else leaf.decision.inputs,
-           "source": {k: v for k, v in leaf.source.items() if k not in SOURCE_DATASET_KEYS}}
+           "source": _today({k: v for k, v in leaf.source.items() if k not in SOURCE_DATASET_KEYS})}
     if isinstance(leaf, Number):
         out.update(value=leaf.value, lo=leaf.lo, hi=leaf.hi, method=leaf.method, unit=leaf.unit, paper=leaf.paper)
     return json.loads(_canon(out))

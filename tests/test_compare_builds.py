@@ -93,3 +93,22 @@ def test_builds_whose_caches_live_elsewhere_are_compared_run_by_run(tmp_path, ca
     assert "1 differ or have no counterpart" in capsys.readouterr().err
     (tmp_path / "cache-b" / "runs" / "k2.json").write_text(json.dumps({**record, "key": "k2"}))
     assert _script().main(args) == 0, "the same run under another key"
+
+
+def test_a_run_from_before_the_epoch_budget_was_renamed_pairs_with_the_same_run_after(tmp_path, capsys):
+    """Model format 6 renamed the config's ``max_epochs`` to ``epochs``: the same run, recorded before and after,
+    is the same run; a changed budget still is not."""
+    _new_build(tmp_path / "a")
+    _new_build(tmp_path / "b")
+    cfg = dataclasses.asdict(TrainConfig(epochs=40))
+    old_cfg = {("max_epochs" if k == "epochs" else k): v for k, v in cfg.items()}
+    for cache, key, config in (("cache-a", "k1", old_cfg), ("cache-b", "k2", cfg)):
+        (tmp_path / cache / "runs").mkdir(parents=True)
+        record = {"key": key, "data_key": "d", "config": config, "test": None, "val_accuracy": 0.9}
+        (tmp_path / cache / "runs" / f"{key}.json").write_text(json.dumps(record))
+    args = [str(tmp_path / "a"), str(tmp_path / "b"), "--data", str(tmp_path / "cache-a"), str(tmp_path / "cache-b")]
+    assert _script().main(args) == 0
+    other = {**cfg, "epochs": 41}
+    (tmp_path / "cache-b" / "runs" / "k2.json").write_text(json.dumps({"key": "k2", "data_key": "d", "config": other,
+                                                                        "test": None, "val_accuracy": 0.9}))
+    assert _script().main(args) == 1

@@ -168,6 +168,28 @@ def test_results_outside_the_builder_write_nothing(monkeypatch):
     assert results.write_part("x", [("x.n", reported.count(3, "n"))]) is None
 
 
+def test_a_chapter_executed_inside_another_writes_nothing_to_that_ones_results(tmp_path, monkeypatch):
+    """The tutorial re-runs the data chapter through papermill; the nested kernel inherits the tutorial's ticket.
+    Before the ticket named its chapter, the nested run wrote the data chapter's numbers (another seed, the smoke
+    preset) into the tutorial's part, and the merge let them replace the data chapter's own."""
+    part = tmp_path / "tutorial.json"
+    monkeypatch.setenv(ticket.ENV, str(ticket.Ticket(chapter="tutorial", results=str(part)).write(tmp_path / "t.json")))
+    assert results.write_part("data", [("data.n", reported.count(3, "n"))]) is None and not part.exists()
+    assert results.write_part("tutorial", [("tutorial.n", reported.count(4, "n"))]) == part
+
+
+def test_a_number_reported_by_two_parts_is_refused_not_replaced(tmp_path, monkeypatch):
+    parts = []
+    for chapter, value in (("data", 3), ("tutorial", 5)):
+        part = tmp_path / f"{chapter}.json"
+        monkeypatch.setenv(ticket.ENV, str(ticket.Ticket(results=str(part)).write(tmp_path / f"{chapter}.t.json")))
+        results.write_part(chapter, [("data.n", reported.count(value, "n"))])
+        parts.append(part)
+    with pytest.raises(DataError, match=r"data\.n is also reported by .*data\.json"):
+        results.merge(parts, tmp_path / "build.json", "smoke")
+    assert not (tmp_path / "build.json").exists()
+
+
 def test_bad_results_files(tmp_path, capsys):
     with pytest.raises(DataError, match="no such file"):
         results.load(tmp_path / "none.json")

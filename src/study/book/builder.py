@@ -312,8 +312,9 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
     follow = running.with_suffix(".progress")
     if pending is not None:
         pending.unlink(missing_ok=True)  # what this execution asks for, nothing older
-    chapter_ticket = ticket.Ticket(progress=str(follow), results=str(ch.results_part), plan=str(ch.plan_part),
-                                   pending=str(pending or ""), device=device, data_dir=str(data_dir or ""))
+    chapter_ticket = ticket.Ticket(chapter=ch.stem, progress=str(follow), results=str(ch.results_part),
+                                   plan=str(ch.plan_part), pending=str(pending or ""), device=device,
+                                   data_dir=str(data_dir or ""))
     ticket_file = chapter_ticket.write(running.with_suffix(".ticket.json"))
     ch.results_part.unlink(missing_ok=True)  # written afresh by this run, or not at all
     ch.plan_part.unlink(missing_ok=True)

@@ -138,21 +138,31 @@ def dumps(leaves: Iterable[tuple[str, Leaf]], **header: Any) -> str:
 
 def write_part(chapter: str, leaves: Iterable[tuple[str, Leaf]]) -> Path | None:
     """Write a chapter's numbers to the results file its ticket names (``study.core.ticket``), if the builder
-    gave it one; returns its path."""
-    part = ticket.current().results
-    if not part:
+    gave it one; returns its path. A chapter executed inside another one's kernel (the tutorial re-running the
+    data chapter with other parameters) writes nothing: the ticket, and its file, are the other chapter's."""
+    t = ticket.current()
+    if not t.results or (t.chapter and t.chapter != chapter):
         return None
-    path = Path(part)
+    path = Path(t.results)
     write_text_atomic(path, dumps(leaves, chapter=chapter))
     return path
 
 
 def merge(parts: list[Path], out: Path, preset: str) -> Path:
-    """Merge the chapters' parts (those that exist, in order) into one results file ``out`` (atomically)."""
+    """Merge the chapters' parts (those that exist, in order) into one results file ``out`` (atomically).
+
+    Raises :class:`DataError` where two parts report the same name (one would silently replace the other)."""
     leaves: dict[str, Leaf] = {}
+    where: dict[str, Path] = {}
     for part in parts:
-        if part.is_file():
-            leaves.update(load(part))
+        if not part.is_file():
+            continue
+        for name, leaf in load(part).items():
+            if name in where:
+                raise DataError(f"results part {part}: {name} is also reported by {where[name]}; each number "
+                                "belongs to one chapter (rebuild with `study book --force` if a part is left "
+                                "from an older build)")
+            leaves[name], where[name] = leaf, part
     write_text_atomic(out, dumps(leaves.items(), preset=preset))
     return out
 

@@ -31,6 +31,10 @@ ENV = "STUDY_TICKET"
 class Ticket:
     """What the builder tells one execution of one chapter."""
 
+    chapter: str = ""
+    """The chapter it was written for (``data``, ``tutorial``, ...): another chapter executed inside that one's
+    kernel (the tutorial re-runs the data chapter through papermill) inherits the environment, not the ticket's
+    results file ('' : any)."""
     progress: str = ""
     """File the chapter's progress lines are appended to ('' : none)."""
     results: str = ""
