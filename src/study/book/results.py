@@ -160,8 +160,8 @@ def merge(parts: list[Path], out: Path, preset: str) -> Path:
         for name, leaf in load(part).items():
             if name in where:
                 raise DataError(f"results part {part}: {name} is also reported by {where[name]}; each number "
-                                "belongs to one chapter (rebuild with `study book --force` if a part is left "
-                                "from an older build)")
+                                f"belongs to one chapter (a part left by an older build: `study book --only "
+                                f"{part.stem}` executes that chapter again)")
             leaves[name], where[name] = leaf, part
     write_text_atomic(out, dumps(leaves.items(), preset=preset))
     return out
