@@ -9,7 +9,7 @@ builds made with ``study book --data-dir``):
 - every number and verdict present in either results file (of either format; the first format's names read
   under today's, ``study.book.results.RENAMED``): value, interval, method, unit, paper value, verdict, the
   inputs it was decided from, and description equal; of its source, everything but the dataset key (which
-  hashes the simulation's code); timings (names with ``time.``) are listed, not compared;
+  hashes the simulation's code); timings (names with ``time.``, the sweep's render CPU time) are skipped;
 - every run record of either ``data/runs/``, paired with the other build's record of the same run (the same
   training config, the same test flag, on a dataset with the same config and seed, or, for a dataset with no
   file of its own, the same config and test split size): equal in everything but its key, its dataset key and
@@ -37,7 +37,7 @@ from study.report.reported import Number
 SOURCE_DATASET_KEYS = ("data_key", "data")
 """Names under which a number's source gives the key of a data set (which hashes the simulation's code): skipped."""
 TIMING = ("time.", "render_cpu_s")
-"""Names of numbers that are times (wall clock or CPU): listed, never compared."""
+"""Names of numbers that are times (wall clock or CPU): skipped, never compared."""
 RECORD_SKIP = ("key", "data_key", "train_seconds", "cpu_seconds")
 """Fields of a run record that hash code or time it, not what it computed."""
 
