@@ -160,8 +160,8 @@ def merge(parts: list[Path], out: Path, preset: str) -> Path:
         for name, leaf in load(part).items():
             if name in where:
                 raise DataError(f"results part {part}: {name} is also reported by {where[name]}; each number "
-                                f"belongs to one chapter (a part left by an older build: `study book --only "
-                                f"{part.stem}` executes that chapter again)")
+                                "belongs to one chapter: execute again the one that no longer reports it "
+                                f"(`study book --only {where[name].stem}` or `--only {part.stem}`)")
             leaves[name], where[name] = leaf, part
     write_text_atomic(out, dumps(leaves.items(), preset=preset))
     return out
