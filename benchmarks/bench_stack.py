@@ -79,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     cfg = TrainConfig(epochs=a.epochs, min_epochs=a.epochs, patience=a.epochs + 1)
     print(f"Table 1's shape: {len(ds.train)} throws, 90 frames, Z, 2 x 64 peephole LSTM, batch 32; {a.epochs} epochs a "
           f"run; device {device}; time loop {native.backend() if device.type == 'cpu' else 'PyTorch (batched)'}")
-    stack.train([(ds, cfg)], device)  # warm up: the compiled loop, the allocator
+    train.train_runs([(ds, cfg)], device)  # warm up: the compiled loop, the allocator
     unit = "CPU" if device.type == "cpu" else "GPU wall-clock"
     print(f"{'K':>4}  {'one at a time':>22}  {'one stack':>22}  {'ratio':>6}")
     for K in a.ks:
@@ -87,17 +87,12 @@ def main(argv: list[str] | None = None) -> int:
         lone = cfgs[: a.alone or K]
         alone = stacked = float("inf")
         for _ in range(2):
-            alone = min(alone, timed(lambda: [stack.train([(ds, c)], device) for c in lone], device) * K / len(lone))
-            stacked = min(stacked, timed(lambda: stack.train([(ds, c) for c in cfgs], device), device))
+            alone = min(alone, timed(lambda: [train.train_runs([(ds, c)], device) for c in lone], device) * K / len(lone))
+            stacked = min(stacked, timed(lambda: train.train_runs([(ds, c) for c in cfgs], device), device))
         per_hour = lambda s: 3600 * K / s  # noqa: E731
         print(f"{K:>4}  {per_hour(alone):>12.0f} runs/{unit}-h  {per_hour(stacked):>12.0f} runs/{unit}-h  "
               f"{alone / stacked:>5.2f}x" + (f"  (lone rate from {len(lone)} runs)" if len(lone) < K else ""),
               flush=True)
-    if device.type == "cpu":
-        before = timed(lambda: train._fit_alone(ds, cfg, progress=False), device)
-        one = timed(lambda: stack.train([(ds, cfg)], device), device)
-        print(f"the former training loop (one run, no stack) against a stack of one: {before:.1f} s vs {one:.1f} s CPU "
-              f"({before / one:.2f}x)")
     if a.profile:
         profile(ds, cfg, device, max(a.ks))
     return 0
@@ -112,7 +107,7 @@ def profile(ds: Dataset, cfg: TrainConfig, device: torch.device, K: int) -> None
     for k in sorted({1, K}):
         runs = [(ds, dataclasses.replace(one_epoch, seed=s)) for s in range(k)]
         with torch_profile(activities=[ProfilerActivity.CPU]) as prof:
-            stack.train(runs, device)
+            train.train_runs(runs, device)
         print(f"\nK = {k}, one epoch:")
         print(prof.key_averages().table(sort_by="self_cpu_time_total", row_limit=12))
 

@@ -213,7 +213,7 @@ def test_the_stacked_first_layer_equals_the_classifier_s(inputs):
 def test_the_split_forward_pass_equals_the_whole_one_with_velocity(cell, inputs, D, backend):
     """Truncated BPTT runs the first frames without a graph and hands the state on: the velocity of the first
     frame after the split must come from the frame before it, so the two passes give the unsplit answer."""
-    from study.learn.train import last_logits
+    from study.learn.stack import last_logits
 
     torch.manual_seed(0)
     net = normalised(Classifier(D, hidden=8, cell=cell, inputs=inputs, fps=30.0).double().eval())

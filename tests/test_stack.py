@@ -9,7 +9,7 @@ import pytest
 import torch
 
 from study.core import ticket
-from study.learn import native, stack
+from study.learn import native, stack, train
 from study.learn.config import TrainConfig
 from study.runs import records, schedule
 
@@ -65,9 +65,17 @@ def test_the_pytorch_loop_too(smoke_dataset, tmp_path):
 
 def test_runs_of_another_shape_do_not_stack(smoke_dataset):
     with pytest.raises(ValueError, match="one shape"):
-        stack.train([(smoke_dataset, SMOKE), (smoke_dataset, dataclasses.replace(SMOKE, hidden=32))])
-    with pytest.raises(ValueError, match="no stacked form"):
-        stack.train([(smoke_dataset, dataclasses.replace(SMOKE, cell="torch-lstm"))])
+        train.train_runs([(smoke_dataset, SMOKE), (smoke_dataset, dataclasses.replace(SMOKE, hidden=32))])
+
+
+@pytest.mark.slow  # trains 4 smoke runs of nn.LSTM
+def test_nn_lstm_trains_through_the_one_loop_and_stacks_too(smoke_dataset, tmp_path):
+    """nn.LSTM has no loop of its own: it steps member by member inside the stack, and is its own run there."""
+    base, other = (dataclasses.replace(c, cell="torch-lstm") for c in (SMOKE, OTHERS[0]))
+    alone = _records(smoke_dataset, [base], tmp_path, "alone")[0]
+    three = _records(smoke_dataset, [other, base, dataclasses.replace(other, seed=9)], tmp_path, "three")
+    assert three[1] == alone
+    assert alone["history"][0]["train_loss"] != three[0]["history"][0]["train_loss"], "each member its own run"
 
 
 def test_the_scheduler_stacks_runs_of_one_shape_longest_first(smoke_dataset):
@@ -77,7 +85,7 @@ def test_the_scheduler_stacks_runs_of_one_shape_longest_first(smoke_dataset):
                                                dataclasses.replace(long, seed=1), dataclasses.replace(SMOKE, seed=2))]
     units = schedule.stacks(jobs, range(len(jobs)), size=2)
     assert units[0] == [1, 4], "the longest input first, its two runs together"
-    assert sorted(map(sorted, units[1:])) == [[0, 2], [3], [5]], "at most two a stack; nn.LSTM alone"
+    assert sorted(map(sorted, units[1:])) == [[0, 2], [3], [5]], "at most two a stack, one shape each"
     alone = schedule.stacks(jobs, range(len(jobs)), size=1)
     assert alone[:2] == [[1], [4]] and sorted(alone[2:]) == [[0], [2], [3], [5]]
     assert schedule.stack_size("cpu") == 1 and schedule.stack_size(torch.device("cuda")) > 1

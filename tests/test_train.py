@@ -13,6 +13,7 @@ from study import cli
 from study.core.errors import ConfigError, ModelError, TrajectoryError
 from study.core.fielddoc import field_docs
 from study.learn import train
+from study.learn import stack  # noqa: F401
 from study.learn.config import CELLS, OLD_MEANING, TrainConfig
 from study.simulate import data
 
@@ -72,12 +73,12 @@ def test_truncated_bptt_reaches_only_the_last_k_frames(k):
     torch.manual_seed(0)
     net = train.Classifier(3, hidden=6).double().eval()
     x = torch.randn(2, 8, 3, dtype=torch.float64, requires_grad=True)
-    train.last_logits(net, x, truncation=k).sum().backward()
+    stack.last_logits(net, x, truncation=k).sum().backward()
     reached = x.grad.abs().sum(dim=(0, 2)) > 0  # (T,)
     first = max(0, 8 - k)
     assert not reached[:first].any() and reached[first:].all()
     with torch.no_grad():  # truncation changes gradients, never the prediction
-        torch.testing.assert_close(train.last_logits(net, x, k), net(x), atol=1e-12, rtol=0)
+        torch.testing.assert_close(stack.last_logits(net, x, k), net(x), atol=1e-12, rtol=0)
 
 
 def test_save_load_round_trip(tmp_path, ds, tm):
@@ -298,13 +299,39 @@ def test_fit_starts_from_the_configured_forget_bias(ds):
     assert mean_forget(1.0) == pytest.approx(mean_forget(0.0) + 1.0, abs=1e-4)
 
 
-@pytest.mark.parametrize("min_epochs, expected", [(0, 2), (5, 5)])
-def test_early_stopping_cannot_fire_before_min_epochs(ds, min_epochs, expected):
-    """No weight moves, so the first epoch stays the best: patience 1 stops at the second epoch, unless
-    the minimum holds the run longer."""
+@pytest.mark.parametrize("min_epochs, expected", [(0, 1), (5, 6)])
+def test_a_run_on_the_plateau_stops_at_min_epochs_plus_patience(ds, min_epochs, expected):
+    """No weight moves, so the validation loss never leaves the plateau: the run stops once ``min_epochs +
+    patience`` epochs have passed, keeping its first epoch."""
     cfg = dataclasses.replace(FROZEN, patience=1, min_epochs=min_epochs, epochs=10)
     tm = train.fit(ds, cfg, progress=False)
+    assert tm.history[0]["val_loss"] > train.PLATEAU_LOSS, "the toy's frozen run is on the plateau"
     assert len(tm.history) == expected and tm.best_epoch == 0
+
+
+def _stops(ds, cfg: train.TrainConfig, val_losses: list[float]) -> int | None:
+    """The epoch after which :func:`train.end_epoch` stops a run shown ``val_losses``, epoch by epoch (None: never)."""
+    r = train.Run(train.stack.member(ds, cfg, torch.device("cpu")))
+    for epoch, loss in enumerate(val_losses):
+        train.end_epoch(r, epoch, loss, 0.5)
+        if r.done:
+            return epoch
+    return None
+
+
+def test_patience_counts_from_the_epoch_the_loss_leaves_the_plateau(ds):
+    """The velocity-Z run of the last cold build: on the plateau for 30 epochs, a blip at epoch 6 its best. Today
+    that blip cannot end it at the minimum; leaving the plateau at epoch 35, it trains on from there."""
+    cfg = dataclasses.replace(TINY, epochs=200, patience=20, min_epochs=30)
+    flat = [0.6931] * 60
+    flat[6] = 0.680  # the blip: lower than any other epoch, still on the plateau (PLATEAU_LOSS is 0.624)
+    assert _stops(ds, cfg, flat) == 49, "never left: stops at min_epochs + patience, not at the minimum (29)"
+    leaving = flat[:35] + [0.60 - 0.01 * k for k in range(20)] + [0.45] * 40
+    assert _stops(ds, cfg, leaving) == 54 + 20, "patience from its best after leaving"
+    early = [0.69, 0.5, 0.4] + [0.41] * 60
+    assert _stops(ds, cfg, early) == 29, "left at once, best at 2: patience runs out at 22, the minimum holds to 29"
+    late_best = [0.69, 0.5] + [0.45] * 20 + [0.40] + [0.45] * 40
+    assert _stops(ds, cfg, late_best) == 22 + 20
 
 
 def test_plateau_schedule_halves_the_rate_when_validation_stalls(ds):

@@ -80,10 +80,11 @@ class TrainConfig:
     epochs: int = 150
     """Upper bound on passes over the training split."""
     patience: int = 20
-    """Stop after this many epochs without a lower validation loss; the best epoch's weights are kept."""
+    """Stop after this many epochs without a lower validation loss, counted once the loss has left the initial
+    plateau (``study.learn.metrics.PLATEAU_LOSS``); the best epoch's weights are kept."""
     min_epochs: int = 30
-    """Early stopping cannot stop a run before this many epochs (so it cannot fire on the initial plateau);
-    ``epochs`` still ends it."""
+    """Early stopping cannot stop a run before this many epochs; a run still on the initial plateau stops after
+    ``min_epochs + patience``; ``epochs`` still ends any run."""
     forget_bias: float = 1.0
     """Added to the forget gates' biases at initialisation (TensorFlow's LSTMCell default, which the paper
     used); the GRU, which has no forget gate, ignores it."""

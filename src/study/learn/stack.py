@@ -1,19 +1,18 @@
-"""Many training runs as one: K classifiers of one shape trained side by side, each exactly as it would train alone.
+"""Many training runs as one: K classifiers of one shape stepped side by side, each exactly as it would train alone.
 
-A training step of one small classifier (batch 32, 64 units) leaves most of a core's time to dispatch: the
-autograd graph, the head, the loss, the optimizer, copies. :func:`train` steps K runs (*members*) of the same
-shape together: one forward and one backward pass over stacked tensors ``(K, ...)`` for all of them, the
-recurrent layers' time loops called once per layer for all members, while every member keeps what makes it its
-own run:
+This module holds only what training many runs at once needs; the recipe every run follows (its optimiser, its
+step, the end of its epoch, its stop) is ``study.learn.train``'s, written once there. A training step of one small
+classifier (batch 32, 64 units) leaves most of a core's time to dispatch: the autograd graph, the head, the loss,
+the optimizer, copies. Here K runs (*members*) of the same shape take one forward and one backward pass over
+stacked tensors ``(K, ...)``, the recurrent layers' time loops called once per layer for all members, while every
+member keeps what makes it its own run:
 
-- its data (its dataset's training part, and its own observation draws: ``study.learn.train.epoch_inputs``),
+- its data (its dataset's training part, and its own observation draws: ``study.learn.inputs.epoch_inputs``),
   its normalisation, its validation part;
 - its seed: its initial weights, batch order and dropout masks come from its own generator, started from the
-  seed as a lone run starts (the weights drawn as ``Classifier`` draws them);
-- its own parameters, a leaf tensor of its own, with its own Adam (learning rate, moments, step), its own
-  learning-rate schedule and its own gradient clipping (the norm of its own gradient);
-- its own early stopping and failure detection: a member that stops, or whose loss stops being finite, leaves
-  the stack with its best epoch's weights, and the others go on.
+  seed (the weights drawn as ``Classifier`` draws them);
+- its own parameters, a leaf tensor of its own (:class:`Layout`), so that its optimiser, clipping and stop are
+  its own.
 
 **A member's result does not depend on its stack** (tested: a run trained alone, in a stack of 3 and in a stack of
 8 gives bitwise-identical weights and history, on either time loop). What could make it depend is anything
@@ -25,7 +24,8 @@ pays; there a member's rounding may depend on the stack size (cuBLAS picks kerne
 The compiled time loops (``peephole.cpp``, ``gru.cpp``) run member by member inside one layer call: each
 member's per-step product is already at the core's speed (about 85 GFLOP/s at B = 32, H = 64, measured with the
 BLAS PyTorch ships), and MKL's batched ``sgemm_batch`` measured no faster (77 GFLOP/s at K = 5), so the gain of a
-stack is everything around the loops. ``benchmarks/bench_stack.py`` measures it.
+stack is everything around the loops. ``nn.LSTM`` (``'torch-lstm'``) runs member by member through the function
+that module calls (``torch.lstm``). ``benchmarks/bench_stack.py`` measures the stack.
 
 Shapes: K members, B batch, T frames, D position dims, C channels the first layer reads, H hidden units, G gate
 rows (4H for the LSTMs, 3H for the GRU). Tensors inside are time-major, ``(K, T, B, .)``.
@@ -33,9 +33,10 @@ rows (4H for the LSTMs, 3H for the GRU). Tensors inside are time-major, ``(K, T,
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -52,12 +53,8 @@ from study.learn.inputs import (
     split_train_val,
 )
 from study.learn.model import Classifier
-from study.learn.trained import THREADS, TrainedModel, num_threads
+from study.learn.trained import THREADS, num_threads
 from study.simulate.data import Dataset
-
-STACKABLE = ("peephole", "no-peephole", "gru")
-"""Cells with a stacked form; ``'torch-lstm'`` (``nn.LSTM``) trains alone."""
-
 
 @dataclass(frozen=True)
 class Shape:
@@ -170,6 +167,8 @@ def encode(views: dict[str, torch.Tensor], shape: Shape, x: torch.Tensor, state:
     new state."""
     K, _, B, _ = x.shape
     H = shape.hidden
+    if shape.cell == "torch-lstm":
+        return _torch_lstm(views, shape, x, state)
     new = []
     for layer in range(shape.layers):
         if shape.cell == "gru":
@@ -184,6 +183,27 @@ def encode(views: dict[str, torch.Tensor], shape: Shape, x: torch.Tensor, state:
         x, h, c = peephole.stacked_layer(x, h0, c0, views[p + "weight_ih"], views[p + "weight_hh"], views[p + "bias"], *peep)
         new.append((h, c))
     return x, new
+
+
+def _torch_lstm(views: dict[str, torch.Tensor], shape: Shape, x: torch.Tensor, state: list | None
+                ) -> tuple[torch.Tensor, list]:
+    """:func:`encode` for ``nn.LSTM``'s cell, member by member through the function ``nn.LSTM`` calls."""
+    K, _, B, _ = x.shape
+    L, H = shape.layers, shape.hidden
+    names = [f"rnn.{n}_l{layer}" for layer in range(L) for n in ("weight_ih", "weight_hh", "bias_ih", "bias_hh")]
+    outs, hs, cs = [], [], []
+    for k in range(K):
+        if state is None:
+            h0 = c0 = x.new_zeros(L, B, H)
+        else:
+            h0 = torch.stack([state[layer][0][k] for layer in range(L)])  # (L, B, H)
+            c0 = torch.stack([state[layer][1][k] for layer in range(L)])
+        out, h, c = torch.lstm(x[k], (h0, c0), [views[n][k] for n in names], True, L, 0.0, False, False, False)
+        outs.append(out)  # (T, B, H)
+        hs.append(h)
+        cs.append(c)
+    h, c = torch.stack(hs), torch.stack(cs)  # (K, L, B, H)
+    return torch.stack(outs), [(h[:, layer], c[:, layer]) for layer in range(L)]
 
 
 def _detach(state: list) -> list:
@@ -213,13 +233,26 @@ def logits(views: dict[str, torch.Tensor], shape: Shape, x: torch.Tensor, mean: 
     return baddbmm(head_b.unsqueeze(1), flat, head_w.transpose(1, 2)).view(*h.shape[:-1], 2)
 
 
+def last_logits(net: Classifier, x: torch.Tensor, truncation: int) -> torch.Tensor:
+    """What training computes for one classifier: ``net``'s logits (B, 2) at the last frame of ``x`` (B, T, D)
+    metres, through the stacked pass as a stack of one, gradients truncated to the last ``truncation`` frames
+    (evaluation mode: no dropout). Equal to ``net(x)``; tests hold the two together."""
+    layout = Layout.of(net)
+    layers = len(net.rnn.layers) if isinstance(net.rnn, model.PeepholeStack) else net.rnn.num_layers
+    sh = Shape(x.shape[1], net.n_inputs, net.features.inputs, net.features.fps, net.cell_type, net.head.in_features,
+               layers, x.shape[0], truncation, "last", x.shape[0], 0)
+    views = layout.views(layout.flat(net)[None])
+    f = net.features
+    return logits(views, sh, x[None], f.mean[None], f.std[None])[0]
+
+
 # ---------------------------------------------------------------------------------------------
-# Training: every member as it would train alone
+# The members: what each run brings to the stack (its recipe is ``study.learn.train``'s)
 
 
 @dataclass
 class Member:
-    """One run of a stack: its data, its parameters and optimizer, and how its training is going."""
+    """One run of a stack: its data, its classifier and parameters, its random numbers."""
 
     cfg: TrainConfig
     view: Callable[[int], torch.Tensor]
@@ -233,23 +266,10 @@ class Member:
     """Its parameters, one leaf vector (P,)."""
     gen: torch.Generator
     """Its random numbers after initialisation: batch order and dropout masks."""
-    opt: torch.optim.Optimizer
-    sched: object | None
-    n_val: int
-    history: list[dict[str, float]] = field(default_factory=list)
-    best_loss: float = math.inf
-    best_epoch: int = 0
-    best_flat: torch.Tensor | None = None
-    """Its weights at its best validation epoch (at first: its initial weights)."""
-    ema: torch.Tensor | None = None
-    """With ``average='ema'``: the moving average of its weights (P,), which is validated and kept instead."""
-    steps: int = 0
-    """Optimiser steps it has taken (the average's warm-up counts them)."""
-    diverged: int | None = None
-    total: float = 0.0
-    order: torch.Tensor | None = None
-    x_tr: torch.Tensor | None = None
-    done: bool = False
+
+    @property
+    def n_val(self) -> int:
+        return len(self.y_va)
 
 
 def shape(dataset: Dataset, cfg: TrainConfig) -> Shape:
@@ -259,9 +279,17 @@ def shape(dataset: Dataset, cfg: TrainConfig) -> Shape:
                  cfg.layers, cfg.batch_size, cfg.truncation, cfg.loss_at, len(tr), len(va))
 
 
-def _member(dataset: Dataset, cfg: TrainConfig, device: torch.device) -> Member:
-    """A member ready to train: its data split and observed as a lone run's, its network initialised as a lone
-    run's (``study.learn.train.fit``), and its generator where that run's random numbers go on from."""
+def common_shape(runs: Sequence[tuple[Dataset, TrainConfig]]) -> Shape:
+    """The one :class:`Shape` of ``runs`` ((dataset, config) pairs); ValueError if they have several."""
+    shapes = {shape(ds, cfg) for ds, cfg in runs}
+    if len(shapes) != 1:
+        raise ValueError(f"train_runs: runs of {len(shapes)} shapes; stack only runs of one shape (stack.shape)")
+    return shapes.pop()
+
+
+def member(dataset: Dataset, cfg: TrainConfig, device: torch.device) -> Member:
+    """A member ready to train: its data split and observed, its network initialised from its seed (weights drawn
+    as ``Classifier`` draws them, inside a forked RNG), and its generator where its random numbers go on from."""
     cfg.check()
     T = cfg.n_frames(dataset.fps)
     x = select_inputs(dataset.train.x, cfg.dims, T, what="training split")
@@ -275,17 +303,12 @@ def _member(dataset: Dataset, cfg: TrainConfig, device: torch.device) -> Member:
                          chrono_frames=T if cfg.forget_init == "chrono" else None, inputs=cfg.inputs, fps=dataset.fps)
         net.set_normalisation(torch.from_numpy(mean).float(), torch.from_numpy(std).float())
         gen = torch.Generator()
-        gen.set_state(torch.get_rng_state())  # the lone run's stream goes on from here
+        gen.set_state(torch.get_rng_state())  # the run's stream goes on from here
     net.to(device)
     flat = Layout.of(net).flat(net).requires_grad_(True)
-    first = flat.detach().clone()  # what a run that diverges before its first validation keeps
-    opt = torch.optim.Adam([flat], lr=cfg.lr, foreach=False)
-    sched = (torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=max(1, cfg.patience // 4))
-             if cfg.lr_schedule == "plateau" else None)
     dev = lambda t: t.to(device)  # noqa: E731
     return Member(cfg, lambda epoch: dev(view(epoch)), dev(torch.from_numpy(y[tr])), dev(torch.from_numpy(x_val)),
-                  dev(torch.from_numpy(y[va])), net, flat, gen, opt, sched, len(va), best_flat=first,
-                  ema=first.clone() if cfg.average == "ema" else None)
+                  dev(torch.from_numpy(y[va])), net, flat, gen)
 
 
 def _dropout(members: Sequence[Member]) -> Callable[[torch.Tensor], torch.Tensor]:
@@ -303,155 +326,55 @@ def _dropout(members: Sequence[Member]) -> Callable[[torch.Tensor], torch.Tensor
     return drop
 
 
-def _losses(out: torch.Tensor, y: torch.Tensor, every: bool) -> list[torch.Tensor]:
-    """Each member's cross-entropy: ``out`` (K, B, 2) at the last frame, or (K, T, B, 2) at every frame; ``y``
-    (K, B)."""
-    if not every:
+def _normalisation(members: Sequence[Member]) -> tuple[torch.Tensor, torch.Tensor]:
+    """The members' channel means and standard deviations, (K, C) each."""
+    return (torch.stack([m.net.features.mean for m in members]), torch.stack([m.net.features.std for m in members]))
+
+
+def losses(members: Sequence[Member], x: torch.Tensor, y: torch.Tensor, layout: Layout, sh: Shape
+           ) -> list[torch.Tensor]:
+    """Each member's training loss on its batch, positions ``x`` (K, B, T, D) metres and labels ``y`` (K, B), in one
+    stacked forward pass (its own dropout masks): the cross-entropy at the last frame, or (``loss_at='every'``)
+    the mean over every frame."""
+    views = layout.views(torch.stack([m.flat for m in members]))
+    every = sh.loss_at == "every"
+    out = logits(views, sh, x, *_normalisation(members), _dropout(members), every)
+    if not every:  # out (K, B, 2)
         return [F.cross_entropy(o, t) for o, t in zip(out.unbind(0), y.unbind(0))]
-    T = out.shape[1]
+    T = out.shape[1]  # out (K, T, B, 2)
     return [F.cross_entropy(o.reshape(-1, 2), t.repeat(T)) for o, t in zip(out.unbind(0), y.unbind(0))]
 
 
 @torch.no_grad()
-def _validate(members: Sequence[Member], layout: Layout, sh: Shape, mean: torch.Tensor, std: torch.Tensor,
-              batch: int = 1024) -> list[tuple[float, float]]:
-    """Each member's validation loss and accuracy (evaluation mode: no dropout), at the last frame, of the weights
-    it keeps (:func:`kept`)."""
-    stacked = torch.stack([kept(m) for m in members])
-    views = layout.views(stacked)
-    n = sh.n_val
+def validate(members: Sequence[Member], weights: Sequence[torch.Tensor], layout: Layout, sh: Shape,
+             batch: int = 1024) -> list[tuple[float, float]]:
+    """Each member's validation loss and accuracy with ``weights`` (its (P,) vector each), in evaluation mode (no
+    dropout), at the last frame."""
+    views = layout.views(torch.stack(list(weights)))
+    mean, std = _normalisation(members)
+    whole = dataclasses.replace(sh, truncation=sh.frames)
     out = []
-    for i in range(0, n, batch):
+    for i in range(0, sh.n_val, batch):
         x = torch.stack([m.x_va[i : i + batch] for m in members])
-        out.append(logits(views, dataclasses.replace(sh, truncation=sh.frames), x, mean, std))
+        out.append(logits(views, whole, x, mean, std))
     lg = torch.cat(out, dim=1)  # (K, n_val, 2)
     return [(F.cross_entropy(l, m.y_va).item(), (l.argmax(1) == m.y_va).double().mean().item())
             for l, m in zip(lg.unbind(0), members)]
 
 
-def train(runs: Sequence[tuple[Dataset, TrainConfig]], device: str | torch.device = "cpu",
-          on_epoch: Callable[[int, TrainConfig], None] | None = None) -> list[TrainedModel]:
-    """Train every run of ``runs`` ((dataset, config) pairs of one :class:`Shape`) as one stack; returns their
-    ``study.learn.train.TrainedModel``, in order, each what training it alone gives. ``on_epoch(i, cfg)`` is
-    called after each epoch of member i (progress)."""
-    if not runs:
-        return []
-    shapes = {shape(ds, cfg) for ds, cfg in runs}
-    if len(shapes) != 1:
-        raise ValueError(f"stack.train: runs of {len(shapes)} shapes; stack only runs of one shape (stack.shape)")
-    sh = shapes.pop()
-    if sh.cell not in STACKABLE:
-        raise ValueError(f"stack.train: cell {sh.cell!r} has no stacked form; train it alone")
-    dev = torch.device(device)
-    deterministic = torch.are_deterministic_algorithms_enabled()
+@contextlib.contextmanager
+def exact() -> Iterator[None]:
+    """Deterministic algorithms for the block, and :data:`THREADS` CPU threads (restored after).
+
+    Deterministic mode fills every new tensor with NaN, a pass over memory per buffer: the layers write every
+    buffer they allocate before reading it, so that fill is turned off (it costs a fifth of a stacked step)."""
+    was = torch.are_deterministic_algorithms_enabled()
     fill = torch.utils.deterministic.fill_uninitialized_memory
     torch.use_deterministic_algorithms(True)
-    # Deterministic mode fills every new tensor with NaN, a pass over memory per buffer: the layers write every
-    # buffer they allocate before reading it, so it is turned off (it costs a fifth of a stacked step).
     torch.utils.deterministic.fill_uninitialized_memory = False
     try:
-        return _train(runs, sh, dev, on_epoch)
+        with num_threads(THREADS):
+            yield
     finally:
-        torch.use_deterministic_algorithms(deterministic)
+        torch.use_deterministic_algorithms(was)
         torch.utils.deterministic.fill_uninitialized_memory = fill
-
-
-def _train(runs: Sequence[tuple[Dataset, TrainConfig]], sh: Shape, dev: torch.device,
-           on_epoch: Callable[[int, TrainConfig], None] | None) -> list[TrainedModel]:
-    with num_threads(THREADS):
-        members = [_member(ds, cfg, dev) for ds, cfg in runs]
-        layout = Layout.of(members[0].net)
-        stats = {id(m): (m.net.features.mean, m.net.features.std) for m in members}
-        for epoch in range(max(m.cfg.epochs for m in members)):
-            active = [m for m in members if not m.done and epoch < m.cfg.epochs]  # the stack shrinks
-            if not active:
-                break
-            _epoch(active, layout, sh, stats, epoch)
-            alive = [m for m in active if m.diverged is None]
-            if alive:
-                mean = torch.stack([stats[id(m)][0] for m in alive])
-                std = torch.stack([stats[id(m)][1] for m in alive])
-                for m, (val_loss, val_acc) in zip(alive, _validate(alive, layout, sh, mean, std)):
-                    _end_epoch(m, epoch, val_loss, val_acc)
-            for i, m in enumerate(members):
-                if m in active and on_epoch is not None:
-                    on_epoch(i, m.cfg)
-    return [_finish(m, layout, ds) for m, (ds, _) in zip(members, runs)]
-
-
-def _epoch(active: list[Member], layout: Layout, sh: Shape, stats: dict, epoch: int) -> None:
-    """One epoch of training for every active member, in lockstep: the same steps, each on its own batches."""
-    for m in active:
-        m.x_tr = m.view(epoch)
-        m.order = torch.randperm(sh.n_train, generator=m.gen)
-        m.total = 0.0
-        lr = m.cfg.lr_at(epoch)  # a cosine budget sets each epoch's rate; the others set it as they go
-        if lr is not None:
-            m.opt.param_groups[0]["lr"] = lr
-    going = list(active)
-    every = sh.loss_at == "every"
-    for i in range(0, sh.n_train, sh.batch_size):
-        going = [m for m in going if m.diverged is None]
-        for m in going:  # a member whose weights stopped being finite has diverged: its loss could only be NaN
-            if not native.all_finite(m.flat.detach()):
-                m.diverged, m.done = epoch, True
-        going = [m for m in going if m.diverged is None]
-        if not going:
-            break
-        idx = [m.order[i : i + sh.batch_size] for m in going]
-        x = torch.stack([m.x_tr[j] for m, j in zip(going, idx)])  # (K, B, T, D)
-        y = torch.stack([m.y_tr[j] for m, j in zip(going, idx)])  # (K, B)
-        stacked = torch.stack([m.flat for m in going])
-        views = layout.views(stacked)
-        mean = torch.stack([stats[id(m)][0] for m in going])
-        std = torch.stack([stats[id(m)][1] for m in going])
-        out = logits(views, sh, x, mean, std, _dropout(going), every)
-        losses = _losses(out, y, every)
-        finite = []
-        values = torch.stack([loss.detach() for loss in losses]).tolist()  # one device sync for the stack
-        for m, loss, value in zip(going, losses, values):
-            if math.isfinite(value):
-                finite.append((m, loss, value))
-            else:
-                m.diverged, m.done = epoch, True  # stops here, its last good weights kept, and says so
-        for m, _, _ in finite:
-            m.opt.zero_grad(set_to_none=True)
-        if not finite:
-            continue
-        torch.stack([loss for _, loss, _ in finite]).sum().backward()
-        for m, _, value in finite:
-            if m.cfg.clip_norm > 0:
-                torch.nn.utils.clip_grad_norm_([m.flat], m.cfg.clip_norm, foreach=False)
-            m.opt.step()
-            if m.ema is not None:
-                decay = m.cfg.ema_decay_at(m.steps)
-                m.ema.mul_(decay).add_(m.flat.detach(), alpha=1 - decay)
-            m.steps += 1
-            m.total += value * len(idx[0])
-
-
-def kept(m: Member) -> torch.Tensor:
-    """The weights ``m`` validates and keeps (P,): the moving average with ``average='ema'``, else its own."""
-    return m.ema if m.ema is not None else m.flat.detach()
-
-
-def _end_epoch(m: Member, epoch: int, val_loss: float, val_acc: float) -> None:
-    """The member's epoch ends as a lone run's does: its history, its schedule, its best weights, its stop."""
-    m.history.append({"epoch": epoch, "train_loss": m.total / len(m.y_tr), "val_loss": val_loss,
-                      "val_accuracy": val_acc, "lr": m.opt.param_groups[0]["lr"]})
-    if m.sched is not None:
-        m.sched.step(val_loss)
-    if val_loss < m.best_loss:
-        m.best_loss, m.best_epoch, m.best_flat = val_loss, epoch, kept(m).clone()
-    elif m.cfg.stops_early and epoch - m.best_epoch >= m.cfg.patience and epoch + 1 >= m.cfg.min_epochs:
-        m.done = True
-
-
-def _finish(m: Member, layout: Layout, dataset: Dataset) -> TrainedModel:
-    """The member's ``TrainedModel``: its best epoch's weights in its classifier."""
-    if m.diverged is not None:
-        m.history.append({"epoch": m.diverged, "train_loss": math.nan, "val_loss": math.nan, "val_accuracy": math.nan})
-    layout.load(m.net, m.best_flat)
-    m.net.eval()
-    return TrainedModel(net=m.net.cpu(), config=m.cfg, fps=dataset.fps, data_key=dataset.key, history=m.history,
-                        best_epoch=m.best_epoch, diverged_epoch=m.diverged, n_val=m.n_val)

@@ -97,8 +97,8 @@ def run(dataset: Dataset, cfg: TrainConfig, data_dir: str | Path, test: bool = T
 def train_stack(jobs: Sequence[tuple[Dataset, TrainConfig, bool]], data_dir: str | Path,
                 device: str | torch.device = "cpu") -> list[dict[str, Any]]:
     """The records of ``jobs`` (dataset, config, scored on the test split?), each read from the cache, made from a
-    kept model, or trained: those left train as one stack (``study.learn.stack.train``; they must share one shape,
-    ``study.learn.stack.shape``), or one by one for a cell without a stacked form.
+    kept model, or trained: those left train side by side (``study.learn.train.train_runs``), one stack per shape
+    (``study.learn.stack.shape``).
 
     A record holds the config, the validation accuracy and loss at the kept epoch, what the validation part says
     of the run (``training``; ``failed`` when it failed to train), whether it diverged (and when), the epochs run,
@@ -120,15 +120,12 @@ def train_stack(jobs: Sequence[tuple[Dataset, TrainConfig, bool]], data_dir: str
         else:
             todo.append(i)
     groups: dict[object, list[int]] = {}
-    for i in todo:  # one stack per shape; a cell without a stacked form alone
+    for i in todo:  # one stack per shape
         ds, c, _ = jobs[i]
-        groups.setdefault(stack.shape(ds, c) if c.cell in stack.STACKABLE else ("alone", i), []).append(i)
+        groups.setdefault(stack.shape(ds, c), []).append(i)
     for group in groups.values():
         t0, c0 = time.perf_counter(), time.process_time()
-        if jobs[group[0]][1].cell in stack.STACKABLE:
-            models = stack.train([(jobs[i][0], jobs[i][1]) for i in group], device)
-        else:
-            models = [train.fit(jobs[group[0]][0], jobs[group[0]][1], progress=False, warn=False)]
+        models = train.train_runs([(jobs[i][0], jobs[i][1]) for i in group], device)
         seconds = (time.perf_counter() - t0) / len(group)
         cpu = (time.process_time() - c0) / len(group)
         for i, tm in zip(group, models):

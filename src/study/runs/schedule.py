@@ -115,12 +115,12 @@ def client(scheduler: str, workers: int = 0):
 
 
 def stacks(jobs: Sequence[Job], indices: Sequence[int], size: int) -> list[list[int]]:
-    """The ``indices`` of ``jobs`` as stacks: runs of one shape together, at most ``size`` a stack (a cell without
-    a stacked form alone), the longest inputs first."""
+    """The ``indices`` of ``jobs`` as stacks: runs of one shape together, at most ``size`` a stack, the longest
+    inputs first."""
     groups: dict[object, list[int]] = {}
     for i in indices:
         ds, c, _ = jobs[i]
-        groups.setdefault(stack.shape(ds, c) if c.cell in stack.STACKABLE else ("alone", i), []).append(i)
+        groups.setdefault(stack.shape(ds, c), []).append(i)
     out = [g[k : k + size] for g in groups.values() for k in range(0, len(g), size)]
     return sorted(out, key=lambda s: -jobs[s[0]][1].n_frames(jobs[s[0]][0].fps))
 
