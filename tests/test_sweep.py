@@ -15,8 +15,8 @@ def test_shots_stay_in_their_familys_ranges():
     for family, r in sweep.FAMILIES.items():
         for _ in range(20):
             s = sweep.draw_shot(family, rng)
-            assert r["height"][0] <= s.height <= r["height"][1] and r["tilt"][0] <= s.tilt <= r["tilt"][1]
-            assert r["yaw"][0] <= abs(s.yaw) <= r["yaw"][1] and r["distance"][0] <= s.distance <= r["distance"][1]
+            assert r.height[0] <= s.height <= r.height[1] and r.tilt[0] <= s.tilt <= r.tilt[1]
+            assert r.yaw[0] <= abs(s.yaw) <= r.yaw[1] and r.distance[0] <= s.distance <= r.distance[1]
             assert sweep.FOV[0] <= s.fov <= sweep.FOV[1] and s.colour in sweep.COLOURS
 
 

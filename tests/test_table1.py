@@ -80,7 +80,7 @@ def test_every_number_keeps_its_name_and_reads_back_from_the_results_file(t1, tm
         for f in ("paper_way", "mean", "mean_t", "across_data", "between_share", "std", "failed"):
             assert f"table1.{d}.{f}" in names and f"table1.velocity.{d}.{f}" in names
         assert f"table1.baseline.{d}" in names and f"table1.lstm_minus_baseline.{d}" in names
-    for key in table1.PROTOCOL_KEYS:
+    for key in (q.key for q in table1.PROTOCOLS):
         assert f"table1.protocol.{key}.z.val_mean" in names and f"table1.protocol.{key}.xyz.stalled" in names
     assert {"table1.verdict", "table1.xyz_minus_z", "table1.velocity.xyz_minus_z", "table1.grid.failed_runs",
             "table1.ablation.peephole.mean", "table1.ablation.peephole_minus_gru", "table1.speed.xyz.paper_way",

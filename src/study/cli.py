@@ -17,6 +17,7 @@ from pathlib import Path
 from study.core import presets
 from study.core.errors import ConfigError, StudyError, check_writable, removed_on_error
 from study.core.fielddoc import field_docs
+from study.see import paths
 
 
 def _plain(doc: str) -> str:
@@ -250,9 +251,9 @@ def _add_tracker_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
 
-SCALE_FROM = ("rest", "mean", "gravity")
-"""``study.see.scale.SCALE_FROM``, spelt out so that ``--help`` imports no numerics (a test keeps them equal)."""
-SCALE_FROM_DEFAULT = "mean"
+SCALE_FROM = paths.SCALE_FROM
+"""How one scale can be read (``study.see.paths``, which imports no numerics)."""
+SCALE_FROM_DEFAULT = paths.DEFAULT
 """How the command line reads the scale unless told."""
 
 

@@ -10,6 +10,7 @@ and what the study adds. No name is built from strings here: every number is a f
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -56,6 +57,16 @@ class Chapters:
         return cls(data.Numbers.read(leaves), table1.Numbers.read(leaves), cues.Numbers.read(leaves),
                    motion.Numbers.read(leaves), engine.Numbers.read(leaves), length.Numbers.read(leaves),
                    realworld.Numbers.read(leaves), decision.Numbers.read(leaves), baselines.Numbers.read(leaves))
+
+    def unread(self, leaves: Mapping[str, Leaf]) -> list[str]:
+        """The names in ``leaves`` of these chapters that no chapter's type reads back: a learner, a protocol, a
+        camera family or path that an experiment wrote but the typed keys (``study.report.learners``,
+        ``study.learn.protocols``, ``study.simulate.observe.CAMERA_FAMILIES``, ``study.see.paths``) do not name.
+        Empty for a sound build."""
+        trees = [getattr(self, f.name) for f in dataclasses.fields(self)]
+        read = {name for tree in trees for name, _ in tree.entries()}
+        mine = tuple(f"{tree.CHAPTER}." for tree in trees)
+        return sorted(n for n in leaves if n.startswith(mine) and n not in read)
 
 
 @dataclass(frozen=True)

@@ -37,19 +37,18 @@ from study.learn.rocket import MiniRocket
 from study.methods import calibration, learners
 from study.report import verdicts
 from study.report.baselines import Condition, Method, Numbers, Timing
+from study.report.learners import WORDS, keys
 from study.report.reported import Number, Verdict, number
 from study.report.text import Table, points, seeds_ci
 from study.runs.runner import Runner
 from study.simulate import measure
 from study.simulate.observe import Observation
 
-METHOD_NAMES: dict[Method, str] = {"peephole": "peephole LSTM (paper)", "gru": "GRU",
-                                   "minirocket": "MiniRocket (sktime)", "physics": "physics baseline",
-                                   "rule": "best one-feature rule"}
-"""Each method in words, in the table's order."""
+METHOD_NAMES: dict[Method, str] = {m: WORDS[m] for m in keys("baselines")}
+"""Each method in words, in the table's order (``study.report.learners``)."""
 DIMS_WORDS: dict[Dims, str] = {"xyz": "X, Y, Z", "z": "Z"}
 """The inputs as the table names them."""
-NETWORKS: tuple[Cell, ...] = ("peephole", "gru")
+NETWORKS: tuple[Cell, ...] = keys("baselines", "network")  # type: ignore[assignment]  (named by their cell)
 """The networks, each at its own grid point."""
 CELLS: tuple[tuple[Dims, Condition], ...] = (("xyz", "exact"), ("z", "exact"), ("z", "observed"))
 """The (input, positions) pairs every method is scored on, in order."""

@@ -63,7 +63,7 @@ from study.simulate import observe
 from study.simulate.synth import SynthConfig
 
 NETWORKS: tuple[Network, ...] = get_args(Network)
-NAMES: dict[Learner, str] = learners.NAMES  # type: ignore[assignment]
+NAMES: dict[Learner, str] = {name: learners.NAMES[name] for name in LEARNERS}
 """Each learner in words."""
 
 

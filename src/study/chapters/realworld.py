@@ -79,7 +79,7 @@ from study.report.text import Table, pct, pct_ci, points
 from study.runs import paper, records
 from study.runs import recommended as saved
 from study.runs.stats import correct_of
-from study.see import render, scale, track, video
+from study.see import paths, render, scale, track, video
 from study.simulate import measure, observe
 
 if TYPE_CHECKING:
@@ -506,7 +506,7 @@ def _figures(objects: str = REAL_OBJECTS) -> dict[str, Verdict]:
 # ---------------------------------------------------------------------------------------------
 # The camera sweep: a camera nobody measured (study.methods.sweep, study.methods.camera_cost)
 
-PATH_KEYS: dict[str, PathKey] = {"exact": "exact", **camera_cost.ONE_SCALE, "geometry": "geometry"}  # type: ignore[dict-item]
+PATH_KEYS: dict[str, PathKey] = {paths.EXACT: paths.EXACT, **{p.words: p.key for p in paths.PATHS}}
 """Each path's name in the tables -> its key in the results file."""
 
 
@@ -572,7 +572,7 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
 def _sweep_numbers(cs: CameraSweep) -> Sweep:
     groups: dict[str, SweepGroup] = {}
     for g, rows in cs.recommended.results.items():
-        paths = {PATH_KEYS[k]: SweepPath(
+        by_path = {PATH_KEYS[k]: SweepPath(
             number(r.accuracy, f"camera sweep ({g}): recommended model's accuracy, heights {k}"),
             None if math.isnan(r.rms_centred_mm) else
             number(r.rms_centred_mm, f"camera sweep ({g}): height error after each clip's median, {k}", unit="mm"),
@@ -581,7 +581,7 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
             for k, r in rows.items()}
         groups[g] = SweepGroup(count(cs.clips_in(g), f"camera sweep ({g}): clips"),
                                number(1000 * cs.floors[g].true_rows if g in cs.floors else math.nan,
-                                      f"camera sweep ({g}): least one-scale height error", unit="mm"), paths)
+                                      f"camera sweep ({g}): least one-scale height error", unit="mm"), by_path)
     drag = {PATH_KEYS[k]: number(iv, f"camera sweep: drag rule's accuracy, heights {k}") for k, iv in cs.drag.items()}
     cpu, _, timed = cs.render_s
     return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]

@@ -31,6 +31,7 @@ import numpy as np
 from study.learn import baseline, train
 from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
 from study.learn.inputs import rotated
+from study.learn.protocols import PROTOCOLS, STUDY, ProtocolKey
 from study.learn.metrics import (
     PLATEAU_LOSS,
     Interval,
@@ -49,7 +50,6 @@ from study.report.table1 import (
     GridNumbers,
     Network,
     Numbers,
-    ProtocolKey,
     ProtocolRow,
     Rotated,
     Row,
@@ -78,8 +78,6 @@ ROTATE = 180.0
 """The augmentation's range, degrees: any heading, as the throws are launched."""
 TURN_SEED = 28
 """Seed of the angles the test throws are turned by (:func:`heading_flips`)."""
-PROTOCOL_KEYS: tuple[ProtocolKey, ...] = ("first", "forget_bias", "min_epochs", "clipping", "average", "plateau")
-"""The results file's name of each protocol of ``paper.PROTOCOLS``, in order."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -562,11 +560,11 @@ class Table1:
 
 
 def protocol_runs(runner: Runner, cfg: TrainConfig) -> Runs:
-    """Every protocol of ``paper.protocol_changes`` at ``cfg``, for Z and X, Y, Z, validation only: one run per
-    (protocol, dims, seed), labelled ``protocol``."""
+    """Every protocol of ``study.learn.protocols.PROTOCOLS`` at ``cfg``, for Z and X, Y, Z, validation only: one run
+    per (protocol, dims, seed), labelled ``protocol`` with its key."""
     plan = paper.protocol_plan(cfg, runner.preset)
     rows = runner.rows([c for _, c in plan], test=False, desc="protocols")
-    return rows.labelled({"protocol": name} for name, _ in plan)
+    return rows.labelled({"protocol": q.key} for q, _ in plan)
 
 
 def ablation_runs(runner: Runner, winners: dict[Cell, TrainConfig]) -> Runs:
@@ -603,27 +601,26 @@ def _grid_table(g: GridSearch, p: object) -> tuple[Table, int, int]:
 def _protocols(protocols: Runs) -> tuple[dict[ProtocolKey, dict[Dims, ProtocolRow]], Table, dict[str, object]]:
     val = {(s.keys["protocol"], s.keys["dims"]): s for s in stats.summarise(protocols, ("protocol", "dims"), "val_accuracy")}
     epochs = {(s.keys["protocol"], s.keys["dims"]): s.mean for s in stats.summarise(protocols, ("protocol", "dims"), "epochs_run")}
-    names = list(paper.PROTOCOLS)
     both: tuple[Dims, Dims] = ("xyz", "z")
-    rows = [{"protocol": name, **{
-        d: f"{pct_pm(val[name, d].mean, val[name, d].std)}; {val[name, d].failed} of {val[name, d].n} stalled; "
-           f"{epochs[name, d]:.0f} epochs" for d in both}} for name in names]
+    rows = [{"protocol": q.words, **{
+        d: f"{pct_pm(val[q.key, d].mean, val[q.key, d].std)}; {val[q.key, d].failed} of {val[q.key, d].n} stalled; "
+           f"{epochs[q.key, d]:.0f} epochs" for d in both}} for q in PROTOCOLS]
     table = Table(rows, {"protocol": "protocol (each row adds one change)",
                          "xyz": "X, Y, Z: validation accuracy; stalls; epochs", "z": "Z only: the same"})
-    numbers = {key: {d: ProtocolRow(number(val[names[i], d].mean, f"validation accuracy, {names[i]}, {paper.DIMS_NAMES[d]}"),
-                                    count(val[names[i], d].failed, f"stalled seeds, {names[i]}"))
-                     for d in both} for i, key in enumerate(PROTOCOL_KEYS)}
-    study = names[paper.STUDY_PROTOCOL]
+    numbers = {q.key: {d: ProtocolRow(number(val[q.key, d].mean, f"validation accuracy, {q.words}, {paper.DIMS_NAMES[d]}"),
+                                      count(val[q.key, d].failed, f"stalled seeds, {q.words}"))
+                       for d in both} for q in PROTOCOLS}
+    first = PROTOCOLS[0].key
 
-    def gain(key: ProtocolKey) -> dict[Dims, float]:  # what the row of ``key`` added to the row above it
-        i = PROTOCOL_KEYS.index(key)
-        return {d: val[names[i], d].mean - val[names[i - 1], d].mean for d in both}
+    def gain(key: ProtocolKey) -> dict[Dims, float]:  # what the protocol of ``key`` added to the one before it
+        before = PROTOCOLS[[q.key for q in PROTOCOLS].index(key) - 1].key
+        return {d: val[key, d].mean - val[before, d].mean for d in both}
 
     step, averaged, last = gain("clipping"), gain("average"), gain("plateau")
     facts = {
-        "stalls_first": sum(val[names[0], d].failed for d in both),
-        "stalls_study": sum(val[study, d].failed for d in both),
-        "n_protocol_runs": sum(val[names[0], d].n for d in both),
+        "stalls_first": sum(val[first, d].failed for d in both),
+        "stalls_study": sum(val[STUDY.key, d].failed for d in both),
+        "n_protocol_runs": sum(val[first, d].n for d in both),
         "clip_gain": " and ".join(f"{100 * step[d]:+.1f} points ({paper.DIMS_NAMES[d]})" for d in both),
         "average_gain": " and ".join(f"{100 * averaged[d]:+.1f} points ({paper.DIMS_NAMES[d]})" for d in both),
         "last_gain": " and ".join(f"{100 * last[d]:+.1f} points ({paper.DIMS_NAMES[d]})" for d in both),

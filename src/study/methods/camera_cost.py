@@ -31,14 +31,14 @@ from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_differen
 from study.methods import sweep
 from study.methods.sweep import Clip
 from study.methods.videos import Video
-from study.see import geometry, render, track
+from study.see import geometry, paths, render, track
 from study.see.gaps import set_scale
 from study.see.scale import DEFAULT, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 from study.simulate import measure as motion
 
-PATHS = ("rest size", "mean silhouette", "gravity", "geometry")
-"""The user's paths from pixels to metres, in the order the tables show them."""
+PATHS: tuple[str, ...] = tuple(p.words for p in paths.PATHS)
+"""The user's paths from pixels to metres by their words, in the order the tables show them (``study.see.paths``)."""
 
 
 def shape_of(cfg) -> ObjectShape:
@@ -62,7 +62,7 @@ def _geometry(traj: Trajectory, shape: ObjectShape) -> Trajectory:
     return replace(traj, z=z, ground_z=0.0, units="m")
 
 
-ONE_SCALE: dict[str, str] = {"rest size": "rest", "mean silhouette": "mean", "gravity": "gravity"}
+ONE_SCALE: dict[str, str] = {p.words: p.key for p in paths.PATHS if p.one_scale}
 """The one-scale paths -> how each reads its scale (``study.see.scale.SCALE_FROM``)."""
 DEFAULT_PATH = next(name for name, how in ONE_SCALE.items() if how == DEFAULT)
 """The path ``study classify VIDEO`` takes unless told otherwise (``study.see.scale.DEFAULT``)."""

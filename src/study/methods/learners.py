@@ -26,6 +26,7 @@ import numpy as np
 from study.learn import baseline
 from study.learn.config import Dims, TrainConfig
 from study.methods.rockets import rocket_predictions
+from study.report.learners import WORDS
 from study.runs.stats import correct_of
 from study.simulate import measure, observe
 
@@ -36,11 +37,8 @@ if TYPE_CHECKING:
 Tests = Mapping[str, tuple[np.ndarray, np.ndarray]]
 """Test inputs by name: (x (n, T, 3) float, metres; y (n,) int labels)."""
 
-NAMES: dict[str, str] = {
-    "peephole_positions": "peephole LSTM, positions (the paper's)", "peephole_velocity": "peephole LSTM, with velocity",
-    "gru_velocity": "GRU, with velocity", "peephole_exact_trained": "peephole LSTM, positions, trained exact",
-    "minirocket": "MiniRocket, positions", "physics": "physics baseline", "rule": "best one-feature rule"}
-"""Each learner of the motion and engine chapters, in words."""
+NAMES: dict[str, str] = WORDS
+"""Each learner in words (``study.report.learners``, where each is defined once)."""
 
 
 @dataclass(frozen=True)

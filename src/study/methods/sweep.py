@@ -31,17 +31,10 @@ from study.methods import videos
 from study.see import render
 from study.see.camera import Camera
 from study.see.size import apparent_size
+from study.simulate.observe import CAMERA_FAMILIES, CameraFamily
 
-FAMILIES: dict[str, dict[str, tuple[float, float]]] = {
-    "square-on": {"height": (0.8, 1.5), "tilt": (0.0, 10.0), "yaw": (0.0, 15.0), "distance": (3.0, 5.0)},
-    "low": {"height": (0.3, 0.6), "tilt": (0.0, 10.0), "yaw": (0.0, 60.0), "distance": (2.0, 8.0)},
-    "oblique": {"height": (0.3, 2.0), "tilt": (0.0, 45.0), "yaw": (30.0, 60.0), "distance": (2.0, 8.0)},
-    "high": {"height": (1.4, 2.0), "tilt": (20.0, 45.0), "yaw": (0.0, 60.0), "distance": (2.0, 8.0)},
-}
-"""Camera families, each a range per quantity (drawn uniformly): height of the camera above the floor, metres;
-tilt below the horizon, degrees; yaw away from square-on to the throw, degrees (either side); horizontal distance
-from the middle of the throw, metres. Together they cover the issue's sweep: 0.3-2 m, 0-45 degrees down, +-60
-degrees, 2-8 m."""
+FAMILIES: dict[str, CameraFamily] = {f.key: f for f in CAMERA_FAMILIES}
+"""The camera families by key (``study.simulate.observe.CAMERA_FAMILIES``, where each is defined once)."""
 FOV = (50.0, 90.0)
 """Vertical field of view, degrees."""
 SIZES = ((640, 480), (854, 480), (1280, 720))
@@ -103,7 +96,7 @@ class Shot:
 def draw_shot(family: str, rng: np.random.Generator) -> Shot:
     """A random :class:`Shot` of ``family``."""
     r = FAMILIES[family]
-    u = {k: float(rng.uniform(*r[k])) for k in ("height", "tilt", "yaw", "distance")}
+    u = {k: float(rng.uniform(*getattr(r, k))) for k in ("height", "tilt", "yaw", "distance")}
     u["yaw"] *= float(rng.choice([-1.0, 1.0]))
     w, h = SIZES[int(rng.integers(len(SIZES)))]
     return Shot(family=family, fov=float(rng.uniform(*FOV)), width=w, height_px=h, fps=float(rng.choice(RATES)),

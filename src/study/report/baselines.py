@@ -7,10 +7,11 @@ from dataclasses import dataclass
 from typing import Literal
 
 from study.learn.config import Dims
+from study.report import learners
 from study.report.reported import Number, Reported, Verdict, named
 
-Method = Literal["peephole", "gru", "minirocket", "physics", "rule"]
-"""The methods compared, by their name in the results file."""
+Method = Literal[learners.keys("baselines")]  # type: ignore[valid-type]
+"""The methods compared, by their name in the results file (``study.report.learners``)."""
 
 
 Condition = Literal["exact", "observed"]

@@ -7,11 +7,12 @@ from dataclasses import dataclass
 from typing import Literal
 
 from study.learn.config import Dims
+from study.report import learners
 from study.report.reported import Number, Reported
 from study.simulate.synth import Engine
 
-Learner = Literal["peephole_positions", "peephole_velocity", "minirocket", "rule"]
-"""The learners of the cross-engine table (named as in ``study.methods.learners.NAMES``)."""
+Learner = Literal[learners.keys("engine")]  # type: ignore[valid-type]
+"""The learners of the cross-engine table (``study.report.learners``)."""
 
 
 View = Literal["exact", "calibrated"]

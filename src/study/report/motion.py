@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal, get_args
 
+from study.report import learners
 from study.report.reported import Number, Reported, named
 
 Air = Literal["air_on", "air_off"]
@@ -14,15 +15,15 @@ View = Literal["exact", "near", "calibrated", "far"]
 """How each air setting's positions are seen, in the table's order."""
 Observed = Literal["near", "calibrated", "far"]
 """The views through a camera."""
-Network = Literal["peephole_positions", "peephole_velocity", "gru_velocity"]
+Network = Literal[learners.keys("motion", "network")]  # type: ignore[valid-type]
 """The networks trained on each column's condition, each at its own configuration."""
 
 
-Trained = Literal[Network, "peephole_exact_trained"]
+Trained = Literal[learners.keys("motion", "network", "exact-trained network")]  # type: ignore[valid-type]
 """Every network row: the three networks, and Table 1's network trained exact and tested observed."""
 
 
-Learner = Literal[Trained, "minirocket", "physics", "rule"]
+Learner = Literal[learners.keys("motion")]  # type: ignore[valid-type]
 """Every row of the table, the ceiling aside."""
 
 

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 from typing import Literal
 
 from study.learn.config import Inputs
+from study.see.paths import PathKey  # the paths are defined once, there
+from study.simulate.observe import CAMERA_FAMILIES
 from study.report.reported import Number, Reported, Verdict, named
 
 Class = Literal["light", "heavy"]
@@ -42,12 +44,8 @@ class Classified(Reported):
     """The real clips (only the classes they hold)."""
 
 
-PathKey = Literal["exact", "rest", "mean", "gravity", "geometry"]
-"""How a clip's heights were had: exactly (the renderer's truth), or by one of a user's paths without a camera
-(``study.methods.camera_cost.PATHS``: the rest size, the mean silhouette, gravity, the fitted geometry)."""
-
-Group = Literal["all", "square-on", "low", "oblique", "high"]
-"""The camera sweep's clips pooled, or one camera family (``study.methods.sweep.FAMILIES``)."""
+Group = Literal[("all", *(f.key for f in CAMERA_FAMILIES))]  # type: ignore[valid-type]
+"""The camera sweep's clips pooled, or one camera family (``study.simulate.observe.CAMERA_FAMILIES``)."""
 
 
 @dataclass(frozen=True)

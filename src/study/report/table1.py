@@ -7,14 +7,12 @@ from dataclasses import dataclass
 from typing import Literal
 
 from study.learn.config import Cell, Dims, Schedule
+from study.learn.protocols import ProtocolKey  # the protocols are defined once, there
 from study.report.reported import Number, Reported, Verdict, named
 
 Network = Literal["positions", "velocity", "speed", "rotated"]
 """Table 1's networks: the paper's on positions; fed velocity; fed what does not turn with the heading ('speed'); the
 paper's on positions, trained on throws turned about the vertical."""
-
-
-ProtocolKey = Literal["first", "forget_bias", "min_epochs", "clipping", "average", "plateau"]
 
 
 ORDER: tuple[Dims, ...] = ("xyz", "z")

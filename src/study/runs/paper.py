@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from study.learn.config import Cell, Dims, Inputs, Schedule, TrainConfig
+from study.learn.protocols import PROTOCOLS, Protocol
 from study.runs.presets import Preset
 from study.runs.runtable import Runs
 
@@ -113,35 +114,11 @@ def seed_configs(cfg: TrainConfig, seeds: tuple[int, ...], dims: tuple[Dims, ...
     return [dataclasses.replace(cfg, dims=d, seed=s, **changes) for d in dims for s in seeds]
 
 
-PROTOCOLS: tuple[str, ...] = (
-    "paper's network, our first protocol",
-    "+ forget bias 1 (the paper's TensorFlow default)",
-    "+ early stopping after a minimum, higher cap",
-    "+ gradient clipping (norm 1)",
-    "+ weights averaged (EMA): the study's protocol",
-    "+ learning rate halved on plateaus",
-)
-"""The training protocols compared on validation data (:func:`protocol_changes`)."""
-STUDY_PROTOCOL = 4
-"""Index in :data:`PROTOCOLS` of the protocol every other experiment uses."""
-
-
-def protocol_changes(p: Preset) -> dict[str, dict[str, Any]]:
-    """Each protocol of :data:`PROTOCOLS` as the config fields it changes from the study's protocol: each
-    row adds one change to the row above it, up to the study's own (:data:`STUDY_PROTOCOL`); the last
-    row adds one more that the study does not keep. The first protocol stopped early as the preset's
-    ``first_patience`` and ``first_epochs`` say."""
-    first = {"min_epochs": 0, "epochs": p.first_epochs, "patience": p.first_patience}
-    raw = {"average": "none"}  # the optimiser's own weights, validated and kept
-    changes = [{"forget_bias": 0.0, "clip_norm": 0.0, **raw, **first}, {"clip_norm": 0.0, **raw, **first},
-               {"clip_norm": 0.0, **raw}, raw, {}, {"lr_schedule": "plateau"}]
-    return dict(zip(PROTOCOLS, changes))
-
-
-def protocol_plan(cfg: TrainConfig, p: Preset) -> list[tuple[str, TrainConfig]]:
-    """Every protocol of :func:`protocol_changes` at ``cfg``, for Z and X, Y, Z with ``p.protocol_seeds``."""
-    return [(name, c) for name, changes in protocol_changes(p).items()
-            for c in seed_configs(cfg, p.protocol_seeds, **changes)]
+def protocol_plan(cfg: TrainConfig, p: Preset) -> list[tuple[Protocol, TrainConfig]]:
+    """Every protocol of ``study.learn.protocols.PROTOCOLS`` at ``cfg``, for Z and X, Y, Z with
+    ``p.protocol_seeds``."""
+    return [(q, c) for q in PROTOCOLS for c in seed_configs(cfg, p.protocol_seeds, **q.fields(p.first_patience,
+                                                                                                p.first_epochs))]
 
 
 def ablation_configs(winners: dict[Cell, TrainConfig], p: Preset) -> list[TrainConfig]:

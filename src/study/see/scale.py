@@ -30,17 +30,12 @@ import numpy as np
 from study.core.errors import ConfigError, TrackingError, check_range
 from study.see.gaps import rest_diameter
 from study.see.geometry import G, GeometryError, phases
+from study.see.paths import DEFAULT, SCALE_FROM  # noqa: F401  (re-exported: how the scale is read)
 from study.see.size import apparent_size
 from study.see.trajectory import Trajectory
 
 KINDS = ("sphere", "box", "cylinder")
 """Object shapes a scale can be read from."""
-SCALE_FROM = ("rest", "mean", "gravity")
-"""How the scale is read (see the module's text)."""
-DEFAULT = "mean"
-"""The way a user's path reads the scale unless told otherwise (``study classify``, ``study track``, the real-world
-chapter): on the book's renders and on the camera sweep its heights are the closest of the one-scale paths to the
-truth, and the paths' accuracies cannot be told apart (the real-world chapter shows both)."""
 GUESS_FACTORS = (1.0, 0.5, 2.0, 1 / 3, 3.0)
 """Multiples of the blob's scale ``gravity`` tries when finding the flights."""
 

@@ -493,17 +493,50 @@ def filmed(x: np.ndarray, camera: AnyCamera, size_factor: float = 1.0,
 
 
 @dataclass(frozen=True)
+class CameraFamily:
+    """One family of the cameras a user might film with: a range per quantity, each drawn uniformly."""
+
+    key: str
+    """Its name in the results (``realworld.sweep.<key>``)."""
+    height: tuple[float, float]
+    """Camera height above the floor, metres."""
+    tilt: tuple[float, float]
+    """Tilt below the horizon, degrees."""
+    yaw: tuple[float, float]
+    """Yaw away from square-on to the throw, degrees (either side)."""
+    distance: tuple[float, float]
+    """Horizontal distance from the middle of the throw, metres."""
+
+
+CAMERA_FAMILIES: tuple[CameraFamily, ...] = (
+    CameraFamily("square-on", height=(0.8, 1.5), tilt=(0.0, 10.0), yaw=(0.0, 15.0), distance=(3.0, 5.0)),
+    CameraFamily("low", height=(0.3, 0.6), tilt=(0.0, 10.0), yaw=(0.0, 60.0), distance=(2.0, 8.0)),
+    CameraFamily("oblique", height=(0.3, 2.0), tilt=(0.0, 45.0), yaw=(30.0, 60.0), distance=(2.0, 8.0)),
+    CameraFamily("high", height=(1.4, 2.0), tilt=(20.0, 45.0), yaw=(0.0, 60.0), distance=(2.0, 8.0)),
+)
+"""The camera families, defined once: the camera sweep films each (``study.methods.sweep``), :class:`AnyCameraRanges`
+spans them all, and the results report each. Together they cover 0.3-2 m high, 0-45 degrees down, +-60 degrees,
+2-8 m away."""
+
+
+def _span(quantity: str) -> tuple[float, float]:
+    """The range of ``quantity`` that covers every camera family."""
+    ranges = [getattr(f, quantity) for f in CAMERA_FAMILIES]
+    return min(lo for lo, _ in ranges), max(hi for _, hi in ranges)
+
+
+@dataclass(frozen=True)
 class AnyCameraRanges:
     """Ranges from which :func:`any_camera` draws each throw's camera and tracker (uniform unless stated): the camera
-    sweep's (``study.methods.sweep.FAMILIES``), all families together."""
+    families' (:data:`CAMERA_FAMILIES`), all together."""
 
-    height: tuple[float, float] = (0.3, 2.0)
+    height: tuple[float, float] = _span("height")
     """Camera height, metres."""
-    tilt: tuple[float, float] = (0.0, 45.0)
+    tilt: tuple[float, float] = _span("tilt")
     """Tilt below the horizon, degrees."""
-    yaw: tuple[float, float] = (-60.0, 60.0)
-    """Yaw from square-on, degrees."""
-    distance: tuple[float, float] = (2.0, 8.0)
+    yaw: tuple[float, float] = (-_span("yaw")[1], _span("yaw")[1])
+    """Yaw from square-on, degrees (either side)."""
+    distance: tuple[float, float] = _span("distance")
     """Horizontal distance, metres."""
     size_factor: tuple[float, float] = (0.9, 1.1)
     """Error of the blob's measured size, log-uniform (one frame's is about 7.5 % off; the mean over a video less)."""

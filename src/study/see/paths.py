@@ -1,0 +1,51 @@
+"""A user's paths from a video's pixels to heights in metres, each defined once: its key (in the results and on the
+command line), its words in the book, and how it reads the scale. No numerics imported: the command line's
+``--help`` reads these.
+
+Every other list of paths is derived from :data:`PATHS`: ``study.see.scale.SCALE_FROM`` and ``study track
+--scale-from`` (the one-scale paths), ``study.methods.camera_cost.PATHS`` (what the camera sweep measures) and the
+results' names (``study.report.realworld.PathKey``, with ``exact``: the renderer's truth).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+
+@dataclass(frozen=True)
+class CameraPath:
+    """One way from a clip's pixels to metres without a measured camera."""
+
+    key: str
+    """Its name in the results (``realworld.sweep.all.<key>``) and, for a one-scale path, ``--scale-from KEY``."""
+    words: str
+    """What the book calls it."""
+    one_scale: bool
+    """True: one metres-per-pixel scale for the whole clip (``study.see.scale.read_scale(how=key)``); False: the
+    camera's geometry fitted frame by frame (``study.see.geometry``)."""
+
+
+PATHS: tuple[CameraPath, ...] = (
+    CameraPath("rest", "rest size", one_scale=True),
+    CameraPath("mean", "mean silhouette", one_scale=True),
+    CameraPath("gravity", "gravity", one_scale=True),
+    CameraPath("geometry", "geometry", one_scale=False),
+)
+"""Every path, in the order the tables show them."""
+
+EXACT = "exact"
+"""The results' key of the renderer's own heights, beside the paths."""
+
+SCALE_FROM: tuple[str, ...] = tuple(p.key for p in PATHS if p.one_scale)
+"""How one scale can be read (``study track --scale-from``)."""
+
+DEFAULT = "mean"
+"""The way a user's path reads the scale unless told otherwise (``study classify``, ``study track``, the real-world
+chapter): on the book's renders and on the camera sweep its heights are the closest of the one-scale paths to the
+truth, and the paths' accuracies cannot be told apart (the real-world chapter shows both)."""
+
+BY_WORDS: dict[str, CameraPath] = {p.words: p for p in PATHS}
+
+PathKey = Literal[(EXACT, *(p.key for p in PATHS))]  # type: ignore[valid-type]
+"""How a clip's heights were had: exactly, or by one of :data:`PATHS`."""
