@@ -9,10 +9,10 @@ import pytest
 from study.book import results
 from study.chapters import decision
 from study.core.errors import ConfigError
-from study.methods import calibration, camera, operating
+from study.methods import calibration, camera, learners, operating
 from study.methods.tracker import TrackerError
 from study.report.text import pct_ci
-from study.runs import Runner, paper
+from study.runs import Runner, paper, stats
 
 
 @pytest.fixture
@@ -244,12 +244,18 @@ def _frames(rng, y, S, T):
     return 1 / (1 + np.exp(-(drift + offset + 0.1 * rng.standard_normal((S, len(y), T)))))
 
 
+def _scores(models, x_cert, y_cert, x_test, y_test) -> learners.Scores:
+    """What ``learners.Network.score`` gives for ``models`` on the certification and the test inputs."""
+    return learners.Scores({"certify": stats.probabilities(models, x_cert), "test": stats.probabilities(models, x_test)},
+                           {"certify": np.asarray(y_cert), "test": np.asarray(y_test)})
+
+
 def test_a_condition_certifies_its_seeds_as_one_classifier_on_their_mean_probability():
     rng = np.random.default_rng(4)
     y_cert, y_test = np.repeat([0, 1], 1000), np.repeat([0, 1], 300)
     x_cert, x_test = _inputs(rng, y_cert, 5), _inputs(rng, y_test, 5)
     models = [Scored(1.0), Scored(3.0)]
-    c = decision.condition("two seeds", models, x_cert, y_cert, x_test, y_test, 0.01)
+    c = decision.condition("two seeds", _scores(models, x_cert, y_cert, x_test, y_test), 0.01)
     mean = [np.mean([m.predict_proba(x)[:, 1] for m in models], axis=0) for x in (x_cert, x_test)]
     want = operating.operating_point(mean[0], y_cert, mean[1], y_test, 0.01)
     assert c.ensemble == want and want.certified is not None and np.array_equal(c.p_test, mean[1])
@@ -272,13 +278,13 @@ def _chapter(n_cert_per_class: int, unstable: bool = False) -> decision.CarDecis
                                           observed_test, _frames(rng, y_cert, 2, T))}
     models = [Scored(1.0), Scored(3.0)]
     conditions = {
-        "exact": decision.condition("Table 1's, exact", models, x_cert, y_cert, x_test, y_test, 0.01),
-        "observed": decision.condition("Table 1's, observed", models, sp.observed_certify, y_cert, sp.observed_test,
-                                     y_test, 0.01),
-        "randomised": decision.condition("trained on random observations, observed", models, sp.observed_certify,
-                                       y_cert, sp.observed_test, y_test, 0.01),
-        "camera": decision.condition("the camera's network (velocity), observed", models[::-1], sp.observed_certify,
-                                   y_cert, sp.observed_test, y_test, 0.01),
+        "exact": decision.condition("Table 1's, exact", _scores(models, x_cert, y_cert, x_test, y_test), 0.01),
+        "observed": decision.condition("Table 1's, observed", _scores(models, sp.observed_certify, y_cert,
+                                                                      sp.observed_test, y_test), 0.01),
+        "randomised": decision.condition("trained on random observations, observed",
+                                         _scores(models, sp.observed_certify, y_cert, sp.observed_test, y_test), 0.01),
+        "camera": decision.condition("the camera's network (velocity), observed",
+                                     _scores(models[::-1], sp.observed_certify, y_cert, sp.observed_test, y_test), 0.01),
     }
     return decision.assemble(sp, camera, nets, conditions, seeds, 0.01)
 

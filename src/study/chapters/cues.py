@@ -35,7 +35,7 @@ from study.learn import baseline
 from study.learn.config import Dims, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.learn.train import TrainedModel
-from study.methods import calibration
+from study.methods import calibration, learners
 from study.methods.ceiling import exact_ceiling
 from study.methods.tracker import LABELS, Decomposition, TrackerError
 from study.methods.tracker_model import TrackerFit
@@ -60,7 +60,7 @@ from study.report.text import Table, pct_ci, seeds_ci
 from study.runs import paper
 from study.runs.runner import Runner
 from study.runs.runtable import Runs
-from study.runs.stats import correct_of, scored
+from study.runs.stats import scored
 from study.simulate import data, measure, observe, synth
 from study.simulate.scene import Shape
 
@@ -239,13 +239,13 @@ def conditions(runner: Runner, cfg: TrainConfig) -> Conditions:
     calibrated = calibration.observation(runner)
     x_obs, x_obs_train = calibration.observed(runner, "test", calibrated, T), calibration.observed(runner, "train", calibrated, T)
 
-    def observed_correct(models: list[TrainedModel]) -> np.ndarray:
-        return correct_of(models, x_obs, ds.test.y)
+    def observed_correct(c: TrainConfig) -> np.ndarray:
+        return learners.Network("observed", c, seeds).score(runner, None, {"t": (x_obs, ds.test.y)}).correct["t"]
 
     correct: dict[tuple[Condition, Dims], np.ndarray] = {
         ("a", "xyz"): exact.where(dims="xyz").correct(), ("a", "z"): exact.where(dims="z").correct(),
         ("b", "xyz"): air_off.where(dims="xyz").correct(), ("b", "z"): air_off.where(dims="z").correct(),
-        ("c", "z"): observed_correct(faithful), ("d", "z"): observed_correct(robust)}
+        ("c", "z"): observed_correct(cfg), ("d", "z"): observed_correct(rand_cfg)}
     no_air = still.dataset
     rule_sets: dict[RuleCondition, list[dict]] = {
         "a": rules(ds.train.x[:, :T], ds.train.y, ds.test.x[:, :T], ds.test.y, fps, contact),

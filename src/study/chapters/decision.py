@@ -26,14 +26,14 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from study.core.errors import ConfigError
 from study.learn.config import Inputs, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
-from study.methods import calibration, camera, operating
+from study.methods import calibration, camera, learners, operating
 from study.report.decision import (
     CertifiedNumbers,
     Choice,
@@ -169,10 +169,9 @@ def every_frame(runner: Runner, camera: CameraChoice, sp: Splits) -> dict[Networ
                       True)], desc="every frame")
     out: dict[NetworkKey, EveryFrame] = {}
     for key, (name, c, x_test, x_cert) in nets.items():
-        runner.train_runs(c, ("z",), seeds, desc=f"every frame, {key}")
-        ms = runner.models(c, seeds, dims="z")
-        p_test, p_cert = (np.stack([m.predict_proba_frames(x)[:, :, 1] for m in ms]) for x in (x_test, x_cert))
-        out[key] = EveryFrame(name, c, p_test, p_cert)  # type: ignore[index]
+        net = learners.Network(name, c, seeds, desc=f"every frame, {key}", frames=True)
+        s = net.score(runner, None, {"test": (x_test, sp.test_y), "certify": (x_cert, sp.certify_y)})
+        out[key] = EveryFrame(name, c, s.p_heavy["test"], s.p_heavy["certify"])  # type: ignore[index]
     return out
 
 
@@ -215,12 +214,6 @@ def clearing_of(net: EveryFrame, y_test: np.ndarray, y_cert: np.ndarray, target:
     ensemble = operating.clearing(net.certify.mean(axis=0), y_cert, net.test.mean(axis=0), y, target)
     return FrameClearing(net.name, right.mean(axis=(0, 1)),
                          tuple(per_seed) if certifiable else None, ensemble)  # type: ignore[arg-type]
-
-
-class Scorer(Protocol):
-    """What :func:`condition` needs of a trained model (``study.learn.train.TrainedModel``)."""
-
-    def predict_proba(self, x: np.ndarray) -> np.ndarray: ...
 
 
 @dataclass(frozen=True)
@@ -276,22 +269,20 @@ class Condition:
         return float(np.mean([s.ece_scaled for s in self.per_seed]))
 
 
-def condition(name: str, models: Sequence[Scorer], x_cert: np.ndarray, y_cert: np.ndarray, x_test: np.ndarray,
-              y_test: np.ndarray, target: float) -> Condition:
-    """Each of ``models`` (one per seed) scored on the certification inputs ``x_cert`` and the test inputs
-    ``x_test`` ((n, T, 3) metres): its operating points for ``target``, ROC area, and calibration error before and
-    after a temperature fitted on the certification split."""
-    per_seed, certify = [], []
-    for m in models:
-        pc, pt = m.predict_proba(x_cert)[:, 1], m.predict_proba(x_test)[:, 1]
+def condition(name: str, scores: learners.Scores, target: float) -> Condition:
+    """A Z classifier's ``scores`` (one row per seed) on the certification split (``"certify"``) and the test split
+    (``"test"``): each seed's operating points for ``target``, ROC area, and calibration error before and after a
+    temperature fitted on the certification split."""
+    y_cert, y_test = scores.y["certify"], scores.y["test"]
+    per_seed = []
+    for pc, pt in zip(scores.p_heavy["certify"], scores.p_heavy["test"]):
         temp = operating.fit_temperature(pc, y_cert)
         per_seed.append(SeedPoint(operating.operating_point(pc, y_cert, pt, y_test, target), pt, temp, operating.auc(*operating.roc(pt, y_test)),
                                   operating.expected_calibration_error(pt, y_test),
                                   operating.expected_calibration_error(operating.scaled(pt, temp), y_test)))
-        certify.append(pc)
     p_test = np.mean([s.p_test for s in per_seed], axis=0)
-    return Condition(name, tuple(per_seed), operating.operating_point(np.mean(certify, axis=0), y_cert, p_test, y_test,
-                                                                      target))
+    return Condition(name, tuple(per_seed), operating.operating_point(np.mean(scores.p_heavy["certify"], axis=0), y_cert,
+                                                                      p_test, y_test, target))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -424,16 +415,18 @@ def compute(runner: Runner, target_miss: float = TARGET_MISS) -> CarDecision:
     nets = every_frame(runner, camera, sp)
     seeds = runner.preset.seeds
     cfg = runner.table1_config()
-    faithful = runner.models(cfg, seeds, dims="z")
-    robust = runner.models(calibration.randomised_config(runner, cfg), seeds, dims="z")
-    cameras = runner.models(camera.config, seeds, dims="z")
-    exact = (sp.certify_x, sp.certify_y, sp.test_x, sp.test_y)
-    observed = (sp.observed_certify, sp.certify_y, sp.observed_test, sp.test_y)
+    exact = {"certify": (sp.certify_x, sp.certify_y), "test": (sp.test_x, sp.test_y)}
+    observed = {"certify": (sp.observed_certify, sp.certify_y), "test": (sp.observed_test, sp.test_y)}
+    faithful = learners.Network("Table 1's", cfg, seeds)
+    robust = learners.Network("randomised", calibration.randomised_config(runner, cfg), seeds)
+    cameras = learners.Network("camera", camera.config, seeds)
     conditions: dict[ConditionKey, Condition] = {
-        "exact": condition("Table 1's, exact", faithful, *exact, target_miss),
-        "observed": condition("Table 1's, observed", faithful, *observed, target_miss),
-        "randomised": condition("trained on random observations, observed", robust, *observed, target_miss),
-        "camera": condition(f"the camera's network ({camera.best}), observed", cameras, *observed, target_miss),
+        "exact": condition("Table 1's, exact", faithful.score(runner, None, exact), target_miss),
+        "observed": condition("Table 1's, observed", faithful.score(runner, None, observed), target_miss),
+        "randomised": condition("trained on random observations, observed", robust.score(runner, None, observed),
+                                target_miss),
+        "camera": condition(f"the camera's network ({camera.best}), observed", cameras.score(runner, None, observed),
+                            target_miss),
     }
     return assemble(sp, camera, nets, conditions, seeds, target_miss)
 

@@ -37,7 +37,7 @@ import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal, Protocol
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -89,14 +89,8 @@ if TYPE_CHECKING:
 # Videos: rendered with a known answer, or read from a folder with a manifest (study.methods.videos)
 
 
-class Model(Protocol):
-    """What :func:`classify` needs of a trained model (``study.learn.train.TrainedModel``)."""
-
-    dims: str
-    fps: float
-    n_frames: int
-
-    def predict_proba(self, x: np.ndarray) -> np.ndarray: ...
+Model = train.TrainedModel | Ensemble
+"""A model the chapter classifies videos with: one seed's, or the seeds' mean."""
 
 
 # ---------------------------------------------------------------------------------------------

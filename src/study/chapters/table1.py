@@ -41,6 +41,7 @@ from study.learn.metrics import (
     hierarchical_bootstrap,
     t_interval,
 )
+from study.methods import learners
 from study.report import verdicts
 from study.report.reported import Number, Verdict, count, number
 from study.report.table1 import (
@@ -212,10 +213,12 @@ def heading_flips(runner: Runner, cfgs: dict[Network, TrainConfig]) -> dict[Netw
     seeded angle per throw, :data:`TURN_SEED`, the same for every network)."""
     x = runner.dataset.test.x
     turned = rotated(x, np.random.default_rng(TURN_SEED).uniform(-180.0, 180.0, len(x)))
+    y = runner.dataset.test.y
     out = {}
     for k, cfg in cfgs.items():
-        models = runner.models(dataclasses.replace(cfg, dims="xyz"), runner.preset.seeds)
-        out[k] = np.stack([m.predict_proba(x).argmax(1) != m.predict_proba(turned).argmax(1) for m in models])
+        net = learners.Network(k, dataclasses.replace(cfg, dims="xyz"), runner.preset.seeds, dims="xyz")
+        s = net.score(runner, None, {"as thrown": (x, y), "turned": (turned, y)})
+        out[k] = s.correct["as thrown"] != s.correct["turned"]  # the label changed
     return out
 
 
@@ -574,13 +577,12 @@ def ablation_runs(runner: Runner, winners: dict[Cell, TrainConfig]) -> Runs:
 
 def baseline_runs(runner: Runner) -> dict[Dims, Fitted]:
     """The physics baseline for Z and X, Y, Z at the preset's length, fitted once each (it has no seed)."""
-    out = {}
+    test, out = runner.dataset.test, {}
     for d in paper.BOTH:
         m = baseline.fit(runner.dataset, d, runner.preset.length)
-        pred = m.predict_proba(runner.dataset.test.x).argmax(axis=1)
-        res = train.metrics(runner.dataset.test.y, pred)
-        out[d] = Fitted(d, res["accuracy"], pred == np.asarray(runner.dataset.test.y), res["per_class_accuracy"],
-                        m.coefficients)
+        s = learners.Physics(d, runner.preset.length).score(runner, None, {"test": (test.x, test.y)})
+        res = train.metrics(test.y, (s.p_heavy["test"][0] > 0.5).astype(np.int64))
+        out[d] = Fitted(d, res["accuracy"], s.correct["test"][0], res["per_class_accuracy"], m.coefficients)
     return out
 
 

@@ -40,15 +40,56 @@ class MiniRocket:
         kernels = MiniRocketMultivariate(random_state=self.seed)
         features = np.asarray(kernels.fit_transform(panel))
         scaler = StandardScaler(with_mean=False).fit(features)
-        ridge = RidgeClassifierCV(alphas=np.logspace(-3, 3, 10)).fit(scaler.transform(features), np.asarray(y))
-        self.parts = {"kernels": kernels, "scaler": scaler, "ridge": ridge}
+        y = np.asarray(y)
+        scaled = scaler.transform(features)
+        ridge = RidgeClassifierCV(alphas=np.logspace(-3, 3, 10)).fit(scaled, y)
+        self.parts = {"kernels": kernels, "scaler": scaler, "ridge": ridge,
+                      "platt": platt(self._held_out(scaled, y, ridge.alpha_), y)}
         return self
 
-    def predict(self, x: np.ndarray) -> np.ndarray:
-        """Labels (n,) for ``x`` (n, T, 3)."""
+    def _held_out(self, scaled: np.ndarray, y: np.ndarray, alpha: float, folds: int = 5) -> np.ndarray:
+        """Each training throw's ridge decision (n,) from a fit that did not see it (``folds``-fold, seeded, at the
+        chosen ``alpha``): what the logistic is fitted on, so that it is not the training fit's overconfidence."""
+        from sklearn.linear_model import RidgeClassifier
+        from sklearn.model_selection import StratifiedKFold
+
+        out = np.zeros(len(y))
+        k = min(folds, int(np.bincount(y).min())) if len(np.unique(y)) == 2 else 0
+        if k < 2:
+            return out  # too few of a class to hold any out: p(heavy) stays at 1/2 (the logistic's slope falls to 0)
+        for tr, te in StratifiedKFold(k, shuffle=True, random_state=self.seed).split(scaled, y):
+            out[te] = RidgeClassifier(alpha=alpha).fit(scaled[tr], y[tr]).decision_function(scaled[te])
+        return out
+
+    def decision(self, x: np.ndarray) -> np.ndarray:
+        """The ridge's decision (n,) for ``x`` (n, T, 3): heavy above 0."""
         p = self.parts
         features = np.asarray(p["kernels"].transform(self._panel(x)))
-        return p["ridge"].predict(p["scaler"].transform(features)).astype(np.int64)
+        return np.asarray(p["ridge"].decision_function(p["scaler"].transform(features)), dtype=np.float64)
+
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        """Labels (n,) for ``x`` (n, T, 3): the ridge's."""
+        return (self.decision(x) > 0).astype(np.int64)
+
+    def p_heavy(self, x: np.ndarray) -> np.ndarray:
+        """p(heavy) (n,) for ``x`` (n, T, 3): the decision through the logistic fitted on held-out decisions, moved
+        so that it crosses 1/2 where the decision crosses 0 (its label is the ridge's: :meth:`predict`)."""
+        a = self.parts["platt"]
+        return 1.0 / (1.0 + np.exp(-a * self.decision(x)))
+
+
+def platt(decision: np.ndarray, y: np.ndarray) -> float:
+    """The slope ``a`` of p(heavy) = 1 / (1 + exp(-a d)) that best fits labels ``y`` (n,) from decisions ``d`` (n,)
+    (maximum likelihood, no intercept, so the label stays the decision's sign): Platt scaling through the origin."""
+    from scipy.optimize import minimize_scalar
+
+    d, t = np.asarray(decision, float), np.asarray(y) == 1
+
+    def loss(log_a: float) -> float:
+        z = np.exp(log_a) * d
+        return float(np.sum(np.logaddexp(0.0, -z) * t + np.logaddexp(0.0, z) * ~t))
+
+    return float(np.exp(minimize_scalar(loss, bounds=(-10.0, 10.0), method="bounded").x))
 
     @property
     def n_inputs(self) -> int:

@@ -31,6 +31,7 @@ from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_differen
 from study.methods import sweep
 from study.methods.sweep import Clip
 from study.methods.videos import Video
+from study.runs.stats import correct_of
 from study.see import geometry, paths, render, track
 from study.see.gaps import set_scale
 from study.see.scale import DEFAULT, ObjectShape, read_scale
@@ -268,8 +269,7 @@ def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]
     first = members[0]
     x, missing = read if read is not None else inputs(clips, tracked, first.fps, first.n_frames)
     y = np.array([c.video.label == "heavy" for c in clips])
-    correct = {k: np.stack([(np.asarray(m.predict_proba(xk))[:, 1] > 0.5) == y for m in members]) & ~missing[k]
-               for k, xk in x.items()}
+    correct = {k: correct_of(members, xk, y) & ~missing[k] for k, xk in x.items()}
     errors = {"exact": [np.zeros(1)] * len(clips), **{k: [_errors(h, k) for h in tracked] for k in PATHS}}
     fams = tuple(c.shot.family for c in clips)
     out: dict[str, dict[str, PathResult]] = {}

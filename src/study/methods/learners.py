@@ -11,6 +11,7 @@ observed test split, or each engine's). The implementations:
 
     tests = {"exact": (x_test, y_test), "observed": (x_seen, y_test)}   # (n, T, 3) metres, (n,) labels
     scores = Network("peephole", cfg, seeds=(0, 1, 2)).score(runner, None, tests)
+    scores.p_heavy["observed"]                                          # (S, n) float: seed s's p(heavy) of throw i
     scores.correct["observed"]                                          # (S, n) bool: seed s got throw i right
 """
 
@@ -27,7 +28,7 @@ from study.learn import baseline
 from study.learn.config import Dims, TrainConfig
 from study.methods.rockets import rocket_predictions
 from study.report.learners import WORDS
-from study.runs.stats import correct_of
+from study.runs.stats import probabilities
 from study.simulate import measure, observe
 
 if TYPE_CHECKING:
@@ -43,10 +44,18 @@ NAMES: dict[str, str] = WORDS
 
 @dataclass(frozen=True)
 class Scores:
-    """Which test throws a learner got right, on each test input."""
+    """How a learner answered each test input: every seed's probability that each throw is heavy.
 
-    correct: dict[str, np.ndarray]
-    """Test name -> (S, n) bool: seed s got throw i right (S = 1 for a learner without a seed)."""
+    A network's is its softmax; the physics baseline's its logistic; MiniRocket's its ridge decision through a
+    logistic fitted on held-out values (``study.learn.rocket``); a rule's 0 or 1. A learner that answers at every
+    frame (``Network(frames=True)``) gives one per frame. The label is heavy where the probability is above 1/2.
+    """
+
+    p_heavy: dict[str, np.ndarray]
+    """Test name -> (S, n) float in [0, 1]: seed s's p(heavy) for throw i (S = 1 for a learner without a seed);
+    (S, n, T) after each of T frames for a learner that answers at every frame."""
+    y: dict[str, np.ndarray]
+    """Test name -> (n,) int labels (0 light, 1 heavy)."""
     failed: int = 0
     """Seeds that failed to train."""
     val: float | None = None
@@ -57,6 +66,16 @@ class Scores:
     """The seeds of its runs (none for the physics baseline and the rules)."""
     runs: Runs | None = field(default=None, compare=False, repr=False)
     """A network's run records (their test accuracy on the exact test split, as trained)."""
+
+    @property
+    def correct(self) -> dict[str, np.ndarray]:
+        """Test name -> (S, n) bool: seed s labelled throw i right (at the last frame, for every-frame answers)."""
+        return {k: (last_frame(p) > 0.5) == (np.asarray(self.y[k]) == 1)[None] for k, p in self.p_heavy.items()}
+
+
+def last_frame(p: np.ndarray) -> np.ndarray:
+    """(S, n) of ``p`` (S, n) or (S, n, T): the answer after the last frame."""
+    return p[..., -1] if p.ndim == 3 else p
 
 
 class Learner(Protocol):
@@ -80,12 +99,14 @@ class Network:
     dims: Dims = "z"
     desc: str = ""
     """What the progress bar says while its runs train."""
+    frames: bool = False
+    """Answer after every frame (``TrainedModel.predict_proba_frames``), not only the last."""
 
     def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
         runs = runner.train_runs(self.cfg, (self.dims,), self.seeds, desc=self.desc or self.name)
         models = runner.models(self.cfg, self.seeds, dims=self.dims) if tests else []  # loaded only to be scored
-        correct = {k: correct_of(models, x, y) for k, (x, y) in tests.items()}
-        return Scores(correct, runs.n_failed, float(np.mean(runs.val_accuracies())), seeds=tuple(self.seeds),
+        p = {k: probabilities(models, x, self.frames) for k, (x, _) in tests.items()}
+        return Scores(p, _labels(tests), runs.n_failed, float(np.mean(runs.val_accuracies())), seeds=tuple(self.seeds),
                       runs=runs)
 
 
@@ -101,10 +122,9 @@ class Rocket:
 
     def score(self, runner: Runner, x_train: np.ndarray | None, tests: Tests) -> Scores:
         xs = {k: x for k, (x, _) in tests.items()}
-        labels = [rocket_predictions(runner.dataset, self.dims, self.n_frames, s, xs, runner.data_dir, x_train)
-                  for s in self.seeds]
-        correct = {k: np.stack([lab[k] == np.asarray(y) for lab in labels]) for k, (_, y) in tests.items()}
-        return Scores(correct, seeds=tuple(self.seeds))
+        fits = [rocket_predictions(runner.dataset, self.dims, self.n_frames, s, xs, runner.data_dir, x_train)
+                for s in self.seeds]
+        return Scores({k: np.stack([f[k] for f in fits]) for k in tests}, _labels(tests), seeds=tuple(self.seeds))
 
 
 @dataclass(frozen=True)
@@ -121,7 +141,7 @@ class Physics:
         if x_train is not None:
             ds = dataclasses.replace(ds, train=dataclasses.replace(ds.train, x=x_train))
         fitted = baseline.fit(ds, self.dims, self.length)
-        return Scores({k: (fitted.predict_proba(x).argmax(1) == np.asarray(y))[None] for k, (x, y) in tests.items()})
+        return Scores({k: probabilities([fitted], x) for k, (x, _) in tests.items()}, _labels(tests))
 
 
 @dataclass(frozen=True)
@@ -139,9 +159,13 @@ class Rule:
         ds = runner.dataset
         seen = observe.height_only if self.height_only else (lambda x: x)
         xtr = ds.train.x if x_train is None else x_train
-        correct, feature = {}, ""
+        p, feature = {}, ""
         for k, (x, y) in tests.items():
             rules = measure.simple_rules(seen(xtr), ds.train.y, seen(x), y, ds.fps, self.contact, self.features)
             best = measure.best_rule(rules)
-            correct[k], feature = best["correct"][None], feature or best["feature"]
-        return Scores(correct, feature=feature)
+            p[k], feature = best["heavy"][None].astype(np.float64), feature or best["feature"]
+        return Scores(p, _labels(tests), feature=feature)
+
+
+def _labels(tests: Tests) -> dict[str, np.ndarray]:
+    return {k: np.asarray(y) for k, (_, y) in tests.items()}

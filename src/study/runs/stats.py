@@ -88,10 +88,19 @@ def validation_pick(per_data: Sequence[Runs]) -> ValidationPick:
     return ValidationPick(picked, iv)
 
 
+def probabilities(models: Sequence[Any], x: np.ndarray, frames: bool = False) -> np.ndarray:
+    """(S, n) float: each of ``models``' (one per seed: a ``TrainedModel``, an ``Ensemble``, the physics baseline)
+    p(heavy) for trajectory i of ``x`` (n, T, 3) metres; with ``frames`` (S, n, T) after every frame
+    (``predict_proba_frames``). A model labels heavy where this is above 1/2."""
+    if frames:
+        return np.stack([m.predict_proba_frames(x)[:, :, 1] for m in models])
+    return np.stack([np.asarray(m.predict_proba(x))[:, 1] for m in models])
+
+
 def correct_of(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """(S, n) bool: model s (anything with ``predict_proba``) called trajectory i of ``x`` (n, T, 3) right."""
-    y = np.asarray(y)
-    return np.stack([m.predict_proba(x).argmax(axis=1) == y for m in models])
+    """(S, n) bool: model s labelled trajectory i of ``x`` (n, T, 3) right (:func:`probabilities` above 1/2 for
+    heavy)."""
+    return (probabilities(models, x) > 0.5) == (np.asarray(y) == 1)[None]
 
 
 def scored(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> Interval:

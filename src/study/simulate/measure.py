@@ -118,8 +118,9 @@ def best_threshold_rule(f_train: np.ndarray, y_train: np.ndarray, f_test: np.nda
 
     A value that could not be measured (NaN) counts as the training split's median.
 
-    Returns threshold, direction ('>' predicts heavy above t, '<=' below), train and test accuracy, and
-    ``correct``: (n_test,) bool, which test items the rule gets right.
+    Returns threshold, direction ('>' predicts heavy above t, '<=' below), train and test accuracy,
+    ``heavy``: (n_test,) bool, which test items the rule calls heavy, and ``correct``: (n_test,) bool, which it gets
+    right.
     """
     f_train, f_test = np.asarray(f_train, float), np.asarray(f_test, float)
     fill = np.nanmedian(f_train) if np.isfinite(f_train).any() else 0.0  # a feature that cannot be measured
@@ -137,7 +138,7 @@ def best_threshold_rule(f_train: np.ndarray, y_train: np.ndarray, f_test: np.nda
     pred = f_test > t if direction == ">" else f_test <= t
     correct = pred == (np.asarray(y_test) == 1)
     return {"threshold": t, "direction": direction, "train_accuracy": acc, "test_accuracy": float(np.mean(correct)),
-            "correct": correct}
+            "heavy": pred, "correct": correct}
 
 
 def best_rule(rules: list[dict]) -> dict:
