@@ -304,3 +304,27 @@ def test_an_in_memory_dataset_is_saved_once_for_the_workers(tmp_path, ds):
     mtime = saved.path.stat().st_mtime_ns
     assert cues.saved(r, ds, "mixed").path.stat().st_mtime_ns == mtime, "written once"
     assert r.on(saved).dataset is saved and r.on(saved).plan is r.plan
+
+
+def test_a_failed_run_is_listed_with_the_reason_the_book_means_it_to_fail_or_as_a_failure_by_chance(tmp_path):
+    import dataclasses as dc
+
+    from study.learn.config import TrainConfig
+    from study.runs import cluster, failures
+
+    def record(name: str, cfg: TrainConfig, failed: bool) -> str:
+        path = tmp_path / f"{name}.json"
+        path.write_text(json.dumps({"config": dc.asdict(cfg), "failed": failed, "best_epoch": 3, "epochs_run": 50}))
+        return str(path)
+
+    first = TrainConfig(forget_bias=0.0, min_epochs=0, clip_norm=0.0)
+    long = TrainConfig(length=6.0)
+    plan = tmp_path / "table1.jsonl"
+    plan.write_text("".join(json.dumps({"model": m, "record": record(m, c, f)}) + "\n" for m, c, f in (
+        ("first", first, True), ("long", long, True), ("chance", TrainConfig(seed=3), True),
+        ("fine", TrainConfig(), False))))
+    failed = cluster.plan_failures([plan])
+    assert [f["model"] for f in failed] == ["first", "long", "chance"] and {f["chapter"] for f in failed} == {"table1"}
+    assert "first protocol" in failed[0]["reason"] and "Figure 4" in failed[1]["reason"]
+    assert [f["model"] for f in failures.by_chance(failed)] == ["chance"]
+    assert failures.reason(dc.asdict(dc.replace(long, forget_init="chrono"))) == failures.BY_CHANCE

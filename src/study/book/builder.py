@@ -39,7 +39,7 @@ from study.core import datadir, presets, ticket
 from study.core.cache import canonical_json, key, source_hash, write_text_atomic
 from study.core.errors import ChapterError, ConfigError, check_writable
 from study.core.progress import Follower
-from study.runs import cluster
+from study.runs import cluster, failures
 
 RUNTIME = ("scheduler",)
 """Parameters that say where a chapter's work runs, not what it computes: injected into the chapters that
@@ -521,7 +521,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
             record = {"preset": preset, "device": device, "wall_seconds": round(time.perf_counter() - started, 3),
                       "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages,
                       "runs": plan_totals(root),
-                      "runs_by_chapter": cluster.plan_by_part([ch.plan_part for ch in chapters(root)])}
+                      "runs_by_chapter": cluster.plan_by_part([ch.plan_part for ch in chapters(root)]),
+                      "failed_runs": cluster.plan_failures([ch.plan_part for ch in chapters(root)])}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
             results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
@@ -749,6 +750,11 @@ def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bo
     with _cluster(scheduler) as address:
         timings = execute(root, preset, force=force, only=only, scheduler=address, device=chosen, data_dir=data_dir)
     print(timings_table(timings, plan_totals(root)), file=sys.stderr)
+    failed = cluster.plan_failures([ch.plan_part for ch in chapters(root)])
+    if failed:
+        chance = len(failures.by_chance(failed))
+        print(f"failed runs: {len(failed)}, {len(failed) - chance} of them designed to fail, {chance} by chance "
+              f"(each with its reason: {EXECUTED}/timings.json, 'failed_runs')", file=sys.stderr)
     if html:
         index = render_html(root) / "index.html"
         print(f"the book: {index}", file=sys.stderr)

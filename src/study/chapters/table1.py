@@ -655,6 +655,7 @@ def _row(runner: Runner, inputs: Inputs, cfg: TrainConfig, s: Seeds, d: Dims) ->
         number(share["share"], f"share of a run's variance between data sets ({share['method']})"),
         number(summ.std, "sample standard deviation over seeds"),
         count(summ.failed + sum(g.n_failed for g in per_data[1:]), "runs that failed to train, every data set"),
+        number(float(np.ptp(first.accuracies())), f"max minus min test accuracy over {summ.n} seeds, {where}"),
     )
     table = {"inputs": INPUT_NAMES[inputs], "dims": paper.DIMS_NAMES[d],
              "paper": pct(paper.TABLE1[d], 0) if inputs == "positions" else "—",

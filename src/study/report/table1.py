@@ -38,6 +38,9 @@ class Row(Reported):
     """Sample standard deviation of the first data set's seeds."""
     failed: Number
     """Runs that failed to train, every data set."""
+    spread: Number | None = None
+    """Max minus min test accuracy over the first data set's seeds: how far one seed's number can land from
+    another's (the study's bar: 2 points)."""
 
 
 @dataclass(frozen=True)

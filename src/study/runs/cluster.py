@@ -73,6 +73,14 @@ def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
     return _totals([record for record, _ in _planned(parts).values()])
 
 
+def plan_failures(parts: Sequence[Path]) -> list[dict[str, Any]]:
+    """Every failed run listed in the plan files ``parts``, each with why the book means it to fail, or that it
+    was not meant to (``study.runs.failures.failed_runs``)."""
+    from study.runs.failures import failed_runs
+
+    return failed_runs(_planned(parts))
+
+
 def plan_by_part(parts: Sequence[Path]) -> dict[str, dict[str, float]]:
     """:func:`plan_totals` of each plan file (by its name without suffix: the chapter), each model counted in the
     first part that lists it, so the parts add up to the whole: where a build's training time goes."""
