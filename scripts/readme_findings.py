@@ -55,7 +55,7 @@ def block(path: Path, commit: str) -> str:
                      _pct(num(f"realworld.table1.rendered.{c}")), verdict(f"realworld.table1.rendered.{c}")))
     rows.append(("real clips of tennis balls (light; others' footage)", "93 % (golf ball)",
                  _pct(num("realworld.table1.real.light")), verdict("realworld.table1.real.light")))
-    sweep, exact = num("realworld.sweep.all.mean.accuracy"), num("realworld.sweep.all.exact.accuracy")
+    sweep, exact = num("usercamera.sweep.all.mean.accuracy"), num("usercamera.sweep.all.exact.accuracy")
     if sweep is not None and exact is not None:
         rows.append(("80 clips from cameras nobody measured (recommended model; exact heights → a user's path)", "—",
                      f"{_pct(exact)} → {_pct(sweep)}", ""))

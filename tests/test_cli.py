@@ -3,6 +3,7 @@ with one line naming the path, exits 2 and leaves nothing behind; `--help` costs
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 import subprocess
@@ -12,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from study import cli
+from study.core.errors import ModelError
 from study.see import render
 
 # CI runs as root, where a read-only folder is still writable: these paths cannot exist at all.
@@ -196,7 +198,7 @@ def test_classify_without_a_model_uses_the_builds_recommended_one(tmp_path, data
     out = data / "models" / "m"
     assert cli.main(["train", "--data", str(dataset_file), "--length", "0.5", "--epochs", "1", "--dims", "z",
                      "--out", str(out), "--no-progress"]) == 0
-    recommended.save(data, "positions, exact", [out, out], Interval(0.9, 0.8, 0.95, "test"), "smoke")
+    recommended.save_one(data, "positions, exact", [out, out], Interval(0.9, 0.8, 0.95, "test"), "smoke")
     assert "models/m" in (data / "recommended.json").read_text()  # relative: the folder can move
     moved = tmp_path / "moved"
     data.rename(moved)
@@ -222,3 +224,26 @@ def test_a_shape_that_does_not_fit_its_sizes_is_one_line_and_exit_2(tmp_path, ca
     rc = cli.main(["track", str(video), "--color", "orange", *args, "--no-progress"])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and why in err[0], err
+
+
+def test_a_recommended_file_holds_a_model_per_camera_path_with_its_accuracies_and_reads_format_1(tmp_path):
+    import json
+
+    from study.learn.metrics import Interval
+    from study.runs import recommended
+
+    data, iv = tmp_path / "data", Interval(0.9, 0.8, 0.95, "test")
+    (data / "m").mkdir(parents=True)
+    one = recommended.PathModel("velocity, any-camera", (data / "m",), iv, {"exact": iv, "mean": iv}, (0.3, 0.7))
+    recommended.save(data, "paper", {recommended.ONE_SCALE: one}, key="abc")
+    back = recommended.read(data)
+    assert back.key == "abc" and back.path() == dataclasses.replace(one, models=(data / "m",))
+    with pytest.raises(ModelError, match="no model for the floor path"):
+        back.path("floor")
+    with pytest.raises(ValueError, match="unknown camera paths"):
+        recommended.save(data, "paper", {"fisheye": one})
+    (data / recommended.FILE).write_text(json.dumps({"format": "study.recommended/1", "name": "positions, exact",
+                                                    "models": ["m"], "preset": "smoke",
+                                                    "val": dataclasses.asdict(iv)}))
+    old = recommended.read(data)
+    assert old.path().name == "positions, exact" and old.path().accuracy == {} and old.path().band is None

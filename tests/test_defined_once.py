@@ -13,7 +13,7 @@ from study.learn import protocols
 from study.learn.config import TrainConfig
 from study.methods import camera_cost, learners, sweep
 from study.report import learners as named
-from study.report import realworld
+from study.report import usercamera
 from study.runs import paper
 from study.runs.presets import preset
 from study.see import paths, scale
@@ -43,7 +43,7 @@ def test_a_protocol_changes_what_its_record_says_and_the_study_protocol_changes_
 
 def test_the_families_the_sweep_films_are_the_ones_the_results_name_and_any_camera_spans():
     assert list(sweep.FAMILIES) == [f.key for f in observe.CAMERA_FAMILIES]
-    assert typing.get_args(realworld.Group) == ("all", *sweep.FAMILIES)
+    assert typing.get_args(usercamera.Group) == ("all", *sweep.FAMILIES)
     r = observe.AnyCameraRanges()
     for f in observe.CAMERA_FAMILIES:
         assert r.height[0] <= f.height[0] and f.height[1] <= r.height[1], f.key
@@ -56,5 +56,5 @@ def test_a_users_paths_are_named_alike_on_the_command_line_in_the_sweep_and_in_t
     assert cli.SCALE_FROM == scale.SCALE_FROM == tuple(camera_cost.ONE_SCALE.values())
     assert cli.SCALE_FROM_DEFAULT == scale.DEFAULT in scale.SCALE_FROM
     assert camera_cost.PATHS == tuple(p.words for p in paths.PATHS)
-    assert typing.get_args(realworld.PathKey) == (paths.EXACT, *(p.key for p in paths.PATHS))
+    assert typing.get_args(usercamera.PathKey) == (paths.EXACT, *(p.key for p in paths.PATHS))
     assert set(camera_cost.SCALE) == set(camera_cost.PATHS), "every path has a way to its heights"

@@ -255,81 +255,36 @@ def _iv(v: float, lo: float | None = None, hi: float | None = None) -> Interval:
     return Interval(v, v - 0.05 if lo is None else lo, v + 0.05 if hi is None else hi, "bootstrap")
 
 
-def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> realworld.CameraSweep:
-    """A camera sweep of two families made up here: exact 0.8 everywhere; every path but gravity (the default among
-    them) 0.6, 0.7 on 'low' and 0.5 on 'high'; 'gravity' ``best_path_gain`` above it; 10 clips a family."""
-    fams = ("low", "high")
-    clips = tuple(SimpleNamespace(shot=SimpleNamespace(family=f, distance=4.0)) for f in fams for _ in range(10))
-    per = {"all": 0.6, "low": 0.7, "high": 0.5}
-    results = {}
-    for g, acc in per.items():
-        rows = {"exact": camera_cost.PathResult(_iv(0.8), None, 0.0, 0.0, 0)}
-        for k in camera_cost.PATHS:
-            a = acc + (best_path_gain if k == "gravity" else 0.0)
-            rows[k] = camera_cost.PathResult(_iv(a), _iv(0.8 - a), 150.0, 100.0, 0)
-        results[g] = rows
-    correct = {k: np.zeros((3, len(clips)), bool) for k in ("exact", *camera_cost.PATHS)}
-    correct["mean silhouette"][:, :12] = True  # 60 %
-    correct["gravity"][:, : 12 + round(20 * best_path_gain)] = True
-    m = camera_cost.Measured(results, correct, tuple(c.shot.family for c in clips))
-    floors = {g: camera_cost.Floor(0.06, 0.062, 10) for g in per}
-    drag = {"exact": _iv(0.75), **{k: _iv(0.5, 0.4, 0.6) for k in camera_cost.PATHS}}
-    if drag_rest is not None:
-        drag = {k: drag_rest if k != "exact" else v for k, v in drag.items()}
-    return realworld.CameraSweep(clips, {"velocity, randomised": m, "velocity, exact": m}, "velocity, randomised",
-                                 floors, drag, 0.075, (600.0, 330.0, len(clips)))
-
-
-def _result(numbers: realworld.Numbers, choice: str, cs: realworld.CameraSweep | None = None) -> realworld.RealWorld:
+def _result(numbers: realworld.Numbers, choice: str) -> realworld.RealWorld:
     empty = Table([], {})
     return realworld.RealWorld(numbers, (), (), _rec(choice), realworld.PixelError(2.14, 4.16, 0.987), (), (), (),
-                               empty, empty, empty, empty, empty, 2, 0, 30, "1", "320×240", "8.4 %", empty,
-                               cs or _sweep(), empty, empty, empty, empty, empty)
+                               empty, empty, empty, empty, empty, 2, 0, 30, "1", "320×240", "8.4 %", empty, empty)
 
 
-def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_path):
-    cs = _sweep()
-    n = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, REAL)}, {"table1": RENDERED}, cs,
+def test_a_users_path_on_the_books_videos_reads_back_and_its_sentences_follow_it(tmp_path):
+    n = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, REAL)}, {"table1": RENDERED},
                            {"table1": RENDERED[:3]})
     names = [name for name, _ in n.entries()]
-    assert {"realworld.sweep.all.clips", "realworld.sweep.low.rest.accuracy", "realworld.sweep.high.rest.cost",
-            "realworld.sweep.all.exact.heights_mm", "realworld.sweep.all.floor_mm", "realworld.sweep.drag.rest",
-            "realworld.sweep.size_error", "realworld.sweep.render_cpu_s", "realworld.user.table1.light",
-            "realworld.exact.table1.heavy"} <= set(names)
-    assert "realworld.sweep.all.exact.cost" not in names, "the exact path has no cost"
-    assert n.sweep.groups["low"].clips.value == 10 and n.sweep.groups["all"].clips.value == 20
+    assert {"realworld.user.table1.light", "realworld.exact.table1.heavy"} <= set(names)
+    assert not any(".sweep." in name for name in names), "the camera sweep is the next chapter's"
     assert n.user["table1"]["light"].verdict == "not comparable"
     f = tmp_path / "results.json"
     f.write_text(results.dumps(n.entries()))
     assert realworld.Numbers.read(results.load(f)) == n
-    r = _result(n, "velocity, randomised", cs)
-    assert r.sweep_words.startswith("On 20 clips") and "most from the high cameras" in r.sweep_words
-    assert "interval that holds 0" in r.default_words and "the default stays" in r.default_words
-    assert "does not survive" in r.drag_words and "mean silhouette path" in r.drag_words
-    assert r.depth_words == "7.5 % of the median camera distance, 4.0 m, is 30 cm of depth"
-    assert "the tracker is not what limits" in r.floor_words
-    assert r.render_words.startswith("rendering the 20 clips took 10.0 CPU-minutes (5.5 minutes")
+    r = _result(n, "velocity, randomised")
     assert r.user_words.startswith("on a user's path, with no camera, it labels 50.0 % [")
     assert r.user_words.endswith("(by the renderer's camera: 50.0 %, 100.0 %; from the throws' exact heights: "
                                  "50.0 %, 100.0 %)")
-    clear = _result(n, "velocity, randomised", _sweep(best_path_gain=0.5, drag_rest=_iv(0.9)))
-    assert "interval clear of 0" in clear.default_words and "should default to it" in clear.default_words
-    assert "survives every path" in clear.drag_words
     assert r.real_count_words == "none were found here"
-    from study.book import summary
-
-    said = summary.Findings._user_camera.fget(SimpleNamespace(sweep=n.sweep))  # the summary's sentence
-    assert said.startswith(" A camera nobody measured leaves less still: on 20 clips") and "(heights off by 100 mm" in said
-    assert summary.Findings._user_camera.fget(SimpleNamespace(sweep=None)) == ""
     limited = dataclasses.replace(r, real=(None, None), real_found=6)
     assert limited.real_count_words == "the first 2 of the folder's 6 clips (this preset keeps 2)"
     mine = realworld.reported(_rec(), {"table1": ("your model", RENDERED, REAL)}, objects="orange balls")
     assert "orange balls filmed by others" in mine.models["table1"].real["light"].decision.reason
     assert "(orange balls, n = 2)" in realworld._acc_table({"your model": (mine.models["table1"], REAL)}, 2,
                                                             "orange balls").markdown()
-    t = realworld._render_heights_table({k: (30.0, 20.0) for k in camera_cost.PATHS}, cs).rows
+    t = realworld._render_heights_table({k: (30.0, 20.0) for k in camera_cost.PATHS}).rows
     assert [r["path"] for r in t if "(default)" in r["path"]] == ["mean silhouette (default)"]
-    assert t[0]["book"] == "20 (30)" and t[0]["sweep"] == "100 (150)"
+    assert t[0]["book"] == "20 (30)"
 
 
 def test_the_sentences_follow_the_numbers():

@@ -275,17 +275,18 @@ def test_a_worker_that_computes_another_key_refuses(tmp_path, ds):
 
 @pytest.mark.slow  # trains twelve tiny models
 def test_the_recommended_model_is_the_best_candidate_on_observed_validation_throws(tmp_path):
+    from study.methods import recommend
     from study.simulate import observe
 
     toy = model_toys.dataset(n=40, T=20)
     r = runner(toy, TINY, tmp_path)
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     ob = observe.Observation(noise=0.01, drop=0.1)
-    cands = realworld.candidates(r, {"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}, ob)
+    cands = recommend.candidates(r, {"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}, ob)
     assert list(cands) == [f"{i}, {t}" for i in ("positions", "velocity") for t in ("exact", "randomised", "any-camera")]
     assert cands["velocity, randomised"].observe == "randomised" and cands["velocity, randomised"].observe_noise == 0.01
     assert cands["velocity, any-camera"] == dataclasses.replace(cands["velocity, randomised"], observe="any-camera")
-    rec = realworld.recommended(r, cands, seeds=(0, 1), ob=ob)
+    rec = recommend.recommended(r, cands, seeds=(0, 1), ob=ob)
     choice, val, user, models = rec.choice, rec.val, rec.val_user, rec.models
     assert set(val) == set(user) == set(models) == set(cands) and choice == max(user, key=lambda k: user[k].value)
     assert val != user, "scored through the calibrated tracker and as a user's camera gives the throws"
@@ -293,7 +294,7 @@ def test_the_recommended_model_is_the_best_candidate_on_observed_validation_thro
     assert [m.config for m in models[choice].members] == [dataclasses.replace(cands[choice], seed=s) for s in (0, 1)]
     assert r.plan.n_models == 12 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
     with pytest.raises(ConfigError, match="seeds is empty"):
-        realworld.recommended(r, cands, seeds=(), ob=ob)
+        recommend.recommended(r, cands, seeds=(), ob=ob)
 
 
 def test_an_in_memory_dataset_is_saved_once_for_the_workers(tmp_path, ds):

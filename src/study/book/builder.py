@@ -470,6 +470,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     package = source_hash(words=True)
     timings: dict[str, dict[str, Any]] = {}
     stages: list[dict[str, Any]] = []
+    steps: dict[str, float] = {}  # the builder's own steps after the chapters: their seconds
     done: list[tuple[Chapter, dict[str, Any], dict[str, Any], float]] = []
     sources = {ch.stem: _read_notebook(ch.source) for ch in chs}
     last = [ch for ch in chs if _runs_last(sources[ch.stem])]  # they read what the others wrote
@@ -512,6 +513,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                 todo.append((n, ch, probe, nb, injected | runtime, {"base": base, "parameters": parameters}))
             _run_planned(root, preset, chs, last, todo, timings, stages, done, Path(tmp), scheduler, device, workers,
                          cache_dir(root, data_dir))
+        if {ch.stem for ch, *_ in done} & RECOMMENDING:
+            steps["recommended model"] = _recommend(preset, cache_dir(root, data_dir), device)
     finally:
         # Keys last, once every chapter of this run has written what it writes: a chapter whose
         # input folder a later chapter adds to is not re-executed next time for that reason alone.
@@ -519,13 +522,30 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
             _write_key(ch, base, parameters, root, seconds)
         if timings:
             record = {"preset": preset, "device": device, "wall_seconds": round(time.perf_counter() - started, 3),
-                      "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages,
+                      "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages, "steps": steps,
                       "runs": plan_totals(root),
                       "runs_by_chapter": cluster.plan_by_part([ch.plan_part for ch in chapters(root)]),
                       "failed_runs": cluster.plan_failures([ch.plan_part for ch in chapters(root)])}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
             results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
+
+
+RECOMMENDING = {"realworld", "usercamera"}
+"""The chapters whose runs the recommended model is chosen from: once one of them has executed, the build saves it."""
+
+
+def _recommend(preset: str, data: Path, device: str) -> float:
+    """The builder's step after the chapters: the model ``study classify`` uses without ``--model``, chosen from the
+    runs the chapters trained and saved in ``data`` (``study.methods.recommend.make``: keyed, so an unchanged build
+    rewrites nothing). Returns its seconds."""
+    from study.methods import recommend
+    from study.runs import Runner
+
+    t0 = time.perf_counter()
+    path = recommend.make(Runner.open(preset, 0, data, device=device))
+    tqdm.write(f"recommended model: {path}", file=sys.stderr)
+    return round(time.perf_counter() - t0, 3)
 
 
 def _cpu_seconds() -> float:

@@ -28,6 +28,7 @@ from study.report import (
     motion,
     realworld,
     table1,
+    usercamera,
     verdicts,
 )
 from study.report.reported import Leaf, Number, Reported, Verdict
@@ -47,6 +48,7 @@ class Chapters:
     engine: engine.Numbers
     length: length.Numbers
     realworld: realworld.Numbers
+    usercamera: usercamera.Numbers
     decision: decision.Numbers
     baselines: baselines.Numbers
 
@@ -56,7 +58,8 @@ class Chapters:
         a number that is not there."""
         return cls(data.Numbers.read(leaves), table1.Numbers.read(leaves), cues.Numbers.read(leaves),
                    motion.Numbers.read(leaves), engine.Numbers.read(leaves), length.Numbers.read(leaves),
-                   realworld.Numbers.read(leaves), decision.Numbers.read(leaves), baselines.Numbers.read(leaves))
+                   realworld.Numbers.read(leaves), usercamera.Numbers.read(leaves), decision.Numbers.read(leaves),
+                   baselines.Numbers.read(leaves))
 
     def unread(self, leaves: Mapping[str, Leaf]) -> list[str]:
         """The names in ``leaves`` of these chapters that no chapter's type reads back: a learner, a protocol, a
@@ -253,7 +256,7 @@ class Findings:
     """The best learner through the calibrated camera: ``air_on``, ``air_off``."""
     camera_error: Number
     """The calibrated camera's height error, metres."""
-    sweep: realworld.Sweep | None = None
+    sweep: usercamera.Sweep | None = None
     """The camera sweep: a camera nobody measured (None: not in the results file)."""
 
     @classmethod
@@ -266,7 +269,7 @@ class Findings:
                    {d: c.engine.table1[d].paper_way for d in table1.ORDER},  # type: ignore[index]
                    {a: getattr(m.ceiling, a) for a in airs}, c.cues.drag_rule.exact,
                    {a: m.learners["peephole_positions"][a]["exact"] for a in airs},  # type: ignore[index]
-                   camera, m.noise["calibrated"], c.realworld.sweep)  # type: ignore[index]
+                   camera, m.noise["calibrated"], c.usercamera.sweep)  # type: ignore[index]
 
     @property
     def text(self) -> str:

@@ -214,6 +214,7 @@ PRODUCERS: dict[str, tuple[str, tuple[str, ...]]] = {
     "video": ("study.methods.videos", ()),
     "tracker-error": ("study.methods.tracker", ()),
     "minirocket": ("study.methods.rockets", ()),
+    "recommended": ("study.methods.recommend", ()),
 }
 """Each cached product: the module whose function makes it, whose import closure its key hashes
 (:func:`code_hash`), and files hashed with that closure but not followed. Runs and their models: the record a

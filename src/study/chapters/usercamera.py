@@ -1,0 +1,300 @@
+"""The chapter *A camera nobody measured*: what a user's own camera leaves of the heights and of the answer.
+
+A user has a phone, not the renderer's camera: ``study classify VIDEO --color C --object-size D`` knows the
+object's colour, shape and size and nothing else. :func:`camera_sweep` films held-aside throws from randomised
+cameras in the camera families (``study.simulate.observe.CAMERA_FAMILIES``; rendered once and cached,
+``study.methods.sweep``), tracks each clip once, turns it into heights by every path of a user's
+(``study.see.paths``, ``study.methods.camera_cost``) and classifies them by every candidate of
+``study.methods.recommend``, beside the same throws' exact heights; the drag rule is read off each path's heights
+too. :func:`compute` returns :class:`UserCamera`; :class:`Numbers` is what it reports, under
+``usercamera.sweep.all.mean.accuracy`` and so on.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from study.learn import train
+from study.learn.metrics import Interval
+from study.methods import camera_cost, sweep
+from study.methods.recommend import Recommendation, recommend
+from study.report.reported import count, number
+from study.report.text import Table, pct, pct_ci, points
+from study.report.usercamera import Numbers, PathKey, Sweep, SweepGroup, SweepPath
+from study.see import paths
+from study.simulate import measure
+from study.simulate.observe import CAMERA_FAMILIES
+
+if TYPE_CHECKING:
+    from study.runs.runner import Runner
+
+
+# ---------------------------------------------------------------------------------------------
+# The camera sweep: a camera nobody measured (study.methods.sweep, study.methods.camera_cost)
+
+PATH_KEYS: dict[str, PathKey] = {paths.EXACT: paths.EXACT, **{p.words: p.key for p in paths.PATHS}}
+"""Each path's name in the tables -> its key in the results file."""
+
+
+@dataclass(frozen=True)
+class CameraSweep:
+    """Held-aside throws filmed from cameras the study never saw, read by a user's paths and classified."""
+
+    clips: tuple[sweep.Clip, ...]
+    """The clips, family by family."""
+    measured: dict[str, camera_cost.Measured]
+    """Candidate name -> its seeds on every path (the recommended one among them)."""
+    choice: str
+    """The recommended candidate's name."""
+    floors: dict[str, camera_cost.Floor]
+    """Group -> the one-scale floor (true and tracked image rows)."""
+    drag: dict[str, Interval]
+    """Path -> the drag rule's accuracy on the clips."""
+    size_error: float
+    """Median relative error of one frame's blob diameter (:func:`study.methods.camera_cost.size_error`)."""
+    render_s: tuple[float, float, int]
+    """CPU seconds and wall seconds the clips took to render, and how many clips' times were recorded."""
+
+    @property
+    def recommended(self) -> camera_cost.Measured:
+        return self.measured[self.choice]
+
+    def clips_in(self, group: str) -> int:
+        """Clips in ``group`` ('all' or a camera family)."""
+        return sum(group in ("all", c.shot.family) for c in self.clips)
+
+
+def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) -> CameraSweep:
+    """The camera sweep on ``runner``'s preset (``preset.sweep_per_family`` clips a family, rendered once and
+    cached): every clip tracked once, turned into heights by every path, classified by every candidate of ``rec``
+    (its seeds), and the drag rule's threshold from the training throws applied to each path's heights."""
+    p, cfg = runner.preset, runner.synth_config
+    clips = sweep.sweep_set(cfg, per_family=p.sweep_per_family, seed=sweep.SWEEP_SEED,
+                            out_dir=runner.data_dir / "realworld", progress=progress,
+                            frame_scale=p.sweep_frame_scale, duration=p.length)
+    shape = camera_cost.shape_of(cfg)
+    tracked = camera_cost.track_clips(clips, shape, progress=progress)
+    reads: dict[tuple[float, int], tuple[dict[str, np.ndarray], dict[str, np.ndarray]]] = {}
+
+    def read(m: train.TrainedModel) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:  # the candidates share one input
+        if (m.fps, m.n_frames) not in reads:
+            reads[m.fps, m.n_frames] = camera_cost.inputs(clips, tracked, m.fps, m.n_frames)
+        return reads[m.fps, m.n_frames]
+
+    measured = {name: camera_cost.measure(ens.members, clips, tracked, read(ens.members[0]))
+                for name, ens in rec.models.items()}
+    first = rec.model.members[0]
+    fps, n = first.fps, first.n_frames
+    contact = cfg.shape.bounding_radius
+    ds = runner.dataset
+    f_train = measure.fall_acceleration(ds.train.x[:, : round(n * ds.fps / fps), 2], ds.fps, contact)
+    drag = camera_cost.drag_rule(f_train, ds.train.y, clips, read(first)[0], fps, contact)
+    times = sweep.render_times(clips)
+    cpu, wall = (sum(t[k] for t in times.values()) for k in ("cpu_s", "wall_s"))
+    return CameraSweep(tuple(clips), measured, rec.choice, camera_cost.floors(clips, tracked), drag,
+                       camera_cost.size_error(clips, tracked, shape), (cpu, wall, len(times)))
+
+
+def _sweep_numbers(cs: CameraSweep) -> Sweep:
+    groups: dict[str, SweepGroup] = {}
+    for g, rows in cs.recommended.results.items():
+        by_path = {PATH_KEYS[k]: SweepPath(
+            number(r.accuracy, f"camera sweep ({g}): recommended model's accuracy, heights {k}"),
+            None if math.isnan(r.rms_centred_mm) else
+            number(r.rms_centred_mm, f"camera sweep ({g}): height error after each clip's median, {k}", unit="mm"),
+            None if r.cost is None else number(r.cost, f"camera sweep ({g}): exact heights' accuracy minus {k}'s",
+                                               signed=True))
+            for k, r in rows.items()}
+        groups[g] = SweepGroup(count(cs.clips_in(g), f"camera sweep ({g}): clips"),
+                               number(1000 * cs.floors[g].true_rows if g in cs.floors else math.nan,
+                                      f"camera sweep ({g}): least one-scale height error", unit="mm"), by_path)
+    drag = {PATH_KEYS[k]: number(iv, f"camera sweep: drag rule's accuracy, heights {k}") for k, iv in cs.drag.items()}
+    cpu, _, timed = cs.render_s
+    return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]
+                 number(cpu, "camera sweep: CPU seconds to render the clips", unit="s") if timed == len(cs.clips)
+                 else None)
+
+
+def _sweep_table(cs: CameraSweep) -> Table:
+    """The recommended model per camera family: accuracy on the exact heights and by each path, with the
+    camera's cost."""
+    rows = []
+    for g, res in cs.recommended.results.items():
+        row = {"group": g, "clips": cs.clips_in(g),
+               "exact": pct_ci(res["exact"].accuracy)}
+        for k in camera_cost.PATHS:
+            r = res[k]
+            row[k] = f"{pct(r.accuracy.value)} (cost {points(r.cost)})" + (f", {r.no_heights} without" if r.no_heights else "")
+        rows.append(row)
+    return Table(rows, {"group": "cameras", "clips": "clips", "exact": "exact heights [95 % CI]",
+                        **{k: f"{k} (exact minus it, points [95 % CI])" for k in camera_cost.PATHS}})
+
+
+def _heights_table(cs: CameraSweep) -> Table:
+    """Height error per camera family and path, and the one-scale floor."""
+    rows = []
+    for g, res in cs.recommended.results.items():
+        fl = cs.floors.get(g)
+        row = {"group": g, "floor": "—" if fl is None else f"{1000 * fl.true_rows:.0f}",
+               "tracked": "—" if fl is None else f"{1000 * fl.tracked_rows:.0f}"}
+        row |= {k: "—" if math.isnan(res[k].rms_mm) else f"{res[k].rms_centred_mm:.0f} ({res[k].rms_mm:.0f})"
+                for k in camera_cost.PATHS}
+        rows.append(row)
+    return Table(rows, {"group": "cameras", "floor": "one-scale floor, true rows (mm)",
+                        "tracked": "the same, tracked rows (mm)",
+                        **{k: f"{k}: mm RMS, median removed (raw)" for k in camera_cost.PATHS}})
+
+
+def _candidates_sweep_table(cs: CameraSweep) -> Table:
+    """Every candidate on the sweep, pooled: exact heights against the default path."""
+    default = camera_cost.DEFAULT_PATH
+    rows = []
+    for name, m in cs.measured.items():
+        r = m.results["all"]
+        best = max(camera_cost.PATHS, key=lambda k: r[k].accuracy.value)
+        rows.append({"model": name + (" ✓" if name == cs.choice else ""), "exact": pct_ci(r["exact"].accuracy),
+                     "user": pct_ci(r[default].accuracy), "cost": points(r[default].cost),
+                     "best": f"{best}: {pct(r[best].accuracy.value)}"})
+    return Table(rows, {"model": "candidate (✓ recommended)", "exact": "exact heights [95 % CI]",
+                        "user": f"user's default path ({default}) [95 % CI]", "cost": "camera's cost, points [95 % CI]",
+                        "best": "best path"})
+
+
+def _drag_table(cs: CameraSweep) -> Table:
+    rows = [{"path": k, "acc": pct_ci(iv)} for k, iv in cs.drag.items()]
+    return Table(rows, {"path": "heights", "acc": "drag rule's accuracy on the sweep [95 % CI]"})
+
+
+
+# ---------------------------------------------------------------------------------------------
+# The chapter's result
+
+
+@dataclass(frozen=True)
+class UserCamera:
+    """Everything the chapter shows: its numbers, its tables and sentences, its figures' data."""
+
+    numbers: Numbers
+    """What the chapter reports (the results file's ``usercamera.*``)."""
+    camera: CameraSweep
+    """The camera sweep."""
+    sweep_acc_table: Table
+    """The recommended model per camera family, exact heights and each path."""
+    sweep_heights_table: Table
+    """Height error per camera family and path, and the one-scale floor."""
+    sweep_models_table: Table
+    """Every candidate on the sweep, pooled."""
+    drag_table: Table
+    """The drag rule on the sweep's heights, by path."""
+
+    # Sentences whose words depend on the numbers -------------------------------------------------
+
+    @property
+    def families_words(self) -> str:
+        """The camera families in words, from their records (``study.simulate.observe.CAMERA_FAMILIES``)."""
+        def span(r: tuple[float, float], unit: str) -> str:
+            return f"{r[0]:g}–{r[1]:g}{unit}"
+
+        return "; ".join(f"*{f.key}* ({span(f.height, ' m')} up, tilted {span(f.tilt, '°')}, yawed "
+                         f"{span(f.yaw, '°')}, {span(f.distance, ' m')} away)" for f in CAMERA_FAMILIES)
+
+    @property
+    def sweep_words(self) -> str:
+        """The camera sweep's answer in one sentence: the recommended model's accuracy on exact heights and by
+        the default path, pooled, and the family where the camera costs most."""
+        res = self.camera.recommended.results
+        default = camera_cost.DEFAULT_PATH
+        worst = max((g for g in res if g != "all"), key=lambda g: res[g][default].cost.value)
+        a = res["all"]
+        return (f"On {len(self.camera.clips)} clips from cameras the study never saw, the recommended model labels "
+                f"{pct_ci(a['exact'].accuracy)} of the throws right from their exact heights and "
+                f"{pct_ci(a[default].accuracy)} from a user's path ({default}): the camera costs "
+                f"{points(a[default].cost)}, most from the {worst} cameras ({points(res[worst][default].cost)})")
+
+
+    @property
+    def drag_words(self) -> str:
+        """Whether the drag cue survives a user's camera: the drag rule's interval on each path against chance."""
+        d = self.camera.drag
+        default = camera_cost.DEFAULT_PATH
+        at_chance = [k for k in camera_cost.PATHS if d[k].lo <= 0.5]
+        verdict = ("it does not survive: on " + ", ".join(at_chance) + " heights the rule's interval holds chance"
+                   if at_chance else "it survives every path (each interval above chance)")
+        return (f"the drag rule (one threshold on the first fall's acceleration, set on the training throws) gets "
+                f"{pct_ci(d['exact'])} of the sweep's throws from their exact heights and {pct_ci(d[default])} "
+                f"from the {default} path; {verdict}")
+
+
+    @property
+    def default_words(self) -> str:
+        """Which path a user should take: the best path's paired difference against the default."""
+        m = self.camera.recommended
+        res = m.results["all"]
+        default = camera_cost.DEFAULT_PATH
+        best = max(camera_cost.PATHS, key=lambda k: res[k].accuracy.value)
+        if best == default:
+            return f"the default ({default}) is also the most accurate path on the sweep"
+        diff = m.difference(best, default)
+        if diff.lo <= 0 <= diff.hi:
+            return (f"the most accurate path, {best}, beats the default ({default}) by {points(diff)}, an "
+                    f"interval that holds 0: the paths cannot be told apart on these clips, and the default stays")
+        return (f"the most accurate path, {best}, beats the default ({default}) by {points(diff)}, an "
+                f"interval clear of 0: `study classify --scale-from` should default to it")
+
+
+    @property
+    def size_words(self) -> str:
+        """How far one frame's apparent size says where the object is."""
+        return pct(self.camera.size_error)
+
+
+    @property
+    def depth_words(self) -> str:
+        """What one frame's size error is in depth, at the sweep's median camera distance."""
+        d = float(np.median([c.shot.distance for c in self.camera.clips]))
+        return (f"{pct(self.camera.size_error)} of the median camera distance, {d:.1f} m, is "
+                f"{100 * self.camera.size_error * d:.0f} cm of depth")
+
+
+    @property
+    def floor_words(self) -> str:
+        """Whether the tracker's rows reach the one-scale floor the true rows do."""
+        f = self.camera.floors.get("all")
+        if f is None:
+            return "no clip was tracked"
+        close = f.tracked_rows <= f.true_rows + 0.005
+        return (f"the best line through the tracker's rows is {1000 * f.tracked_rows:.0f} mm against "
+                f"{1000 * f.true_rows:.0f} mm through the true ones: "
+                + ("the tracker is not what limits the heights" if close else
+                   "the tracker adds to the floor"))
+
+
+    @property
+    def models_words(self) -> str:
+        """The camera's cost to each candidate, by how it was trained."""
+        default = camera_cost.DEFAULT_PATH
+        parts = [f"{name} {points(m.results['all'][default].cost)}" for name, m in self.camera.measured.items()]
+        return "the camera's cost in points, exact heights minus the default path: " + "; ".join(parts)
+
+
+    @property
+    def render_words(self) -> str:
+        cpu, wall, timed = self.camera.render_s
+        n = len(self.camera.clips)
+        if not timed:
+            return f"the {n} clips' rendering times were not recorded (rendered before they were kept)"
+        return (f"rendering the {n} clips took {cpu / 60:.1f} CPU-minutes ({wall / 60:.1f} minutes of wall time"
+                f"{'' if timed == n else f', for the {timed} clips timed'}), once: they are cached by key")
+
+
+
+def compute(runner: Runner, progress: bool = False) -> UserCamera:
+    """The chapter on ``runner``'s preset: the camera sweep classified by every candidate of the recommended model
+    (``study.methods.recommend``; every run cached, the clips rendered once)."""
+    cs = camera_sweep(runner, recommend(runner), progress)
+    return UserCamera(Numbers(_sweep_numbers(cs)), cs, _sweep_table(cs), _heights_table(cs),
+                      _candidates_sweep_table(cs), _drag_table(cs))

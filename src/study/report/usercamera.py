@@ -1,0 +1,63 @@
+"""What the chapter *A camera nobody measured* reports, typed: the names its numbers are glued and stored under
+(``usercamera.…``), read back by the summary without running the chapter (``study.chapters.usercamera`` computes
+them)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from study.report.reported import Number, Reported, named
+from study.see.paths import PathKey  # the paths are defined once, there
+from study.simulate.observe import CAMERA_FAMILIES
+
+Group = Literal[("all", *(f.key for f in CAMERA_FAMILIES))]  # type: ignore[valid-type]
+"""The camera sweep's clips pooled, or one camera family (``study.simulate.observe.CAMERA_FAMILIES``)."""
+
+
+@dataclass(frozen=True)
+class SweepPath(Reported):
+    """One path on a group of the camera sweep's clips, read by the recommended model."""
+
+    accuracy: Number
+    """Accuracy over the clips and the model's seeds (a clip without heights counts as a miss)."""
+    heights_mm: Number | None = None
+    """Root-mean-square height error after removing each clip's median error, millimetres (0: exact; None: the
+    path turned no clip into heights)."""
+    cost: Number | None = None
+    """The exact heights' accuracy minus this path's, paired over clips and seeds, points (None: exact)."""
+
+
+@dataclass(frozen=True)
+class SweepGroup(Reported):
+    """A group of the camera sweep's clips."""
+
+    clips: Number
+    """Clips in the group."""
+    floor_mm: Number
+    """The least height error any one-scale path can reach on them, millimetres RMS (true image rows)."""
+    paths: dict[PathKey, SweepPath] = named("")
+    """Each path, by name."""
+
+
+@dataclass(frozen=True)
+class Sweep(Reported):
+    """What a camera nobody measured leaves of the heights and of the answer (the camera sweep)."""
+
+    groups: dict[Group, SweepGroup] = named("")
+    """All clips and each camera family."""
+    drag: dict[PathKey, Number] = named("drag")
+    """The drag rule's accuracy on the clips, by path."""
+    size_error: Number | None = None
+    """Median relative error of one frame's blob diameter against the object's true apparent size."""
+    render_cpu_s: Number | None = None
+    """CPU seconds the clips took to render, as recorded when they were made (None: not recorded)."""
+
+
+@dataclass(frozen=True)
+class Numbers(Reported):
+    """Every number the chapter *A camera nobody measured* reports."""
+
+    CHAPTER = "usercamera"
+    sweep: Sweep
+    """The camera sweep."""

@@ -1,0 +1,81 @@
+"""The chapter *A camera nobody measured* (study.chapters.usercamera): its numbers keep their names and read back,
+and its sentences follow them; made-up sweeps, no rendering."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from study.book import results, summary
+from study.chapters import usercamera
+from study.learn.metrics import Interval
+from study.methods import camera_cost
+from study.report.text import Table
+
+
+def _iv(v: float, lo: float | None = None, hi: float | None = None) -> Interval:
+    return Interval(v, v - 0.05 if lo is None else lo, v + 0.05 if hi is None else hi, "bootstrap")
+
+
+def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> usercamera.CameraSweep:
+    """A camera sweep of two families made up here: exact 0.8 everywhere; every path but gravity (the default among
+    them) 0.6, 0.7 on 'low' and 0.5 on 'high'; 'gravity' ``best_path_gain`` above it; 10 clips a family."""
+    fams = ("low", "high")
+    clips = tuple(SimpleNamespace(shot=SimpleNamespace(family=f, distance=4.0)) for f in fams for _ in range(10))
+    per = {"all": 0.6, "low": 0.7, "high": 0.5}
+    res = {}
+    for g, acc in per.items():
+        rows = {"exact": camera_cost.PathResult(_iv(0.8), None, 0.0, 0.0, 0)}
+        for k in camera_cost.PATHS:
+            a = acc + (best_path_gain if k == "gravity" else 0.0)
+            rows[k] = camera_cost.PathResult(_iv(a), _iv(0.8 - a), 150.0, 100.0, 0)
+        res[g] = rows
+    correct = {k: np.zeros((3, len(clips)), bool) for k in ("exact", *camera_cost.PATHS)}
+    correct["mean silhouette"][:, :12] = True  # 60 %
+    correct["gravity"][:, : 12 + round(20 * best_path_gain)] = True
+    m = camera_cost.Measured(res, correct, tuple(c.shot.family for c in clips))
+    floors = {g: camera_cost.Floor(0.06, 0.062, 10) for g in per}
+    drag = {"exact": _iv(0.75), **{k: _iv(0.5, 0.4, 0.6) for k in camera_cost.PATHS}}
+    if drag_rest is not None:
+        drag = {k: drag_rest if k != "exact" else v for k, v in drag.items()}
+    return usercamera.CameraSweep(clips, {"velocity, randomised": m, "velocity, exact": m}, "velocity, randomised",
+                                  floors, drag, 0.075, (600.0, 330.0, len(clips)))
+
+
+def _result(cs: usercamera.CameraSweep) -> usercamera.UserCamera:
+    empty = Table([], {})
+    return usercamera.UserCamera(usercamera.Numbers(usercamera._sweep_numbers(cs)), cs, empty, empty, empty, empty)
+
+
+def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_path):
+    cs = _sweep()
+    n = usercamera.Numbers(usercamera._sweep_numbers(cs))
+    names = [name for name, _ in n.entries()]
+    assert {"usercamera.sweep.all.clips", "usercamera.sweep.low.rest.accuracy", "usercamera.sweep.high.rest.cost",
+            "usercamera.sweep.all.exact.heights_mm", "usercamera.sweep.all.floor_mm", "usercamera.sweep.drag.rest",
+            "usercamera.sweep.size_error", "usercamera.sweep.render_cpu_s"} <= set(names)
+    assert "usercamera.sweep.all.exact.cost" not in names, "the exact path has no cost"
+    assert n.sweep.groups["low"].clips.value == 10 and n.sweep.groups["all"].clips.value == 20
+    f = tmp_path / "results.json"
+    f.write_text(results.dumps(n.entries()))
+    assert usercamera.Numbers.read(results.load(f)) == n
+    r = _result(cs)
+    assert r.sweep_words.startswith("On 20 clips") and "most from the high cameras" in r.sweep_words
+    assert "interval that holds 0" in r.default_words and "the default stays" in r.default_words
+    assert "does not survive" in r.drag_words and "mean silhouette path" in r.drag_words
+    assert r.depth_words == "7.5 % of the median camera distance, 4.0 m, is 30 cm of depth"
+    assert "the tracker is not what limits" in r.floor_words
+    assert r.render_words.startswith("rendering the 20 clips took 10.0 CPU-minutes (5.5 minutes")
+    clear = _result(_sweep(best_path_gain=0.5, drag_rest=_iv(0.9)))
+    assert "interval clear of 0" in clear.default_words and "should default to it" in clear.default_words
+    assert "survives every path" in clear.drag_words
+    said = summary.Findings._user_camera.fget(SimpleNamespace(sweep=n.sweep))  # the summary's sentence
+    assert said.startswith(" A camera nobody measured leaves less still: on 20 clips") and "(heights off by 100 mm" in said
+    assert summary.Findings._user_camera.fget(SimpleNamespace(sweep=None)) == ""
+
+
+def test_the_families_are_described_from_their_records():
+    words = _result(_sweep()).families_words
+    for f in usercamera.CAMERA_FAMILIES:
+        assert f"*{f.key}*" in words and f"{f.height[0]:g}–{f.height[1]:g} m up" in words
