@@ -247,3 +247,30 @@ def test_a_recommended_file_holds_a_model_per_camera_path_with_its_accuracies_an
                                                     "val": dataclasses.asdict(iv)}))
     old = recommended.read(data)
     assert old.path().name == "positions, exact" and old.path().accuracy == {} and old.path().band is None
+
+
+def test_a_bad_choice_is_one_line_and_a_colour_reads_in_any_case(capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["classify", "x.mp4", "--color", "purple"])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert e.value.code == 2 and len(err) == 1 and "invalid choice: 'purple'" in err[0], err
+    assert "usage:" not in err[0] and err[0].endswith("see study classify --help")
+    from study.see.config import TrackConfig
+
+    either = [[b.tolist() for b in TrackConfig(color=c).bounds()] for c in ("Green", "green")]
+    assert either[0] == either[1]
+    assert cli.build_parser().parse_args(["track", "v.mp4", "--color", "ORANGE"]).color == "orange"
+
+
+def test_classify_reports_the_missing_video_and_the_missing_size_before_the_model(tmp_path, capsys):
+    """No model anywhere, and yet the input's own problems come first: they are what the user must fix."""
+    empty = ["--data-dir", str(tmp_path / "no-data")]
+    assert cli.main(["classify", str(tmp_path / "gone.mp4"), *empty]) == 2
+    assert "gone.mp4: no such file" in one_error_line(capsys)
+    video = tmp_path / "throw.mp4"
+    video.write_bytes(b"x")
+    assert cli.main(["classify", str(video), "--color", "orange", *empty]) == 2
+    line = one_error_line(capsys)
+    assert "not given for the colour 'orange'" in line and "tennis ball's 0.067 m is assumed only" in line
+    assert cli.main(["classify", "--manifest", str(tmp_path / "nodir" / "MANIFEST.csv"), *empty]) == 2
+    assert "--manifest " in (line := one_error_line(capsys)) and "nodir/MANIFEST.csv: no such file" in line

@@ -328,3 +328,26 @@ def test_every_real_clip_is_credited_to_where_it_came_from(tmp_path):
     assert rows[0] == {"file": "a.mp4", "source": "someone/clips 85eec8e res/a.mp4", "licence": "none stated"}
     assert rows[1]["source"] == rows[1]["licence"] == "not stated", "a clip without a source says so"
     assert "No real clips" in _result(only, "positions, exact").credits.markdown()
+
+
+def test_a_manifest_is_read_strictly_an_unknown_column_a_colour_in_any_case_no_silent_tennis_size(tmp_path):
+    """A misspelt header is refused naming the column, its likely meaning and the known ones; a colour's name reads
+    in any case; an object of another colour with no size is refused, not scaled as a tennis ball."""
+    (tmp_path / "a.mp4").write_bytes(b"x")
+    m = tmp_path / "MANIFEST.csv"
+    m.write_text("file,lable,colour\na.mp4,light,orange\n")
+    with pytest.raises(ConfigError, match=r"column 'lable' is unknown \(did you mean 'label'\?\); its columns are "
+                                          r"file, label, color, object_size, object_shape"):
+        realworld.read_manifest(tmp_path)
+    m.write_text("file,label,color,object_size\na.mp4,light,Orange,0.2\n")
+    assert realworld.read_manifest(tmp_path)[0].color == "orange"
+    m.write_text("file,label,color\na.mp4,light,orange\n")
+    with pytest.raises(ConfigError, match="a.mp4: no object_size for an object that is not tennis-yellow"):
+        realworld.read_manifest(tmp_path)
+    assert realworld.read_manifest(tmp_path, object_size=0.2)[0].object_size == 0.2, "one size for every row"
+    m.write_text("file,label\na.mp4,light\n")
+    assert realworld.read_manifest(tmp_path)[0].object_size == 0.067, "the tennis colour: a tennis ball"
+    m.write_text("file,label,object,source_repository,licence\na.mp4,light,a ball,someone/repo,none stated\n")
+    assert realworld.read_manifest(tmp_path)[0].info["licence"] == "none stated", "the shared clips' notes are kept"
+    with pytest.raises(DataError, match="--manifest .*nope: no such folder"):
+        realworld.read_manifest(tmp_path / "nope", what="--manifest")

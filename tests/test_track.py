@@ -298,7 +298,7 @@ def test_a_video_with_neither_a_size_nor_a_scale_is_refused_not_read_in_pixels(r
 def test_cli_classify_rejects_xyz_model(rendered, tmp_path, capsys):
     cfg = train.TrainConfig(dims="xyz", length=0.5, hidden=4, epochs=1, batch_size=8, truncation=5)
     folder = train.fit(model_toys.dataset(n=8, T=15), cfg, progress=False).save(tmp_path / "xyz")
-    rc = cli.main(["classify", "--model", str(folder), str(rendered.video), "--color", "orange"])
+    rc = cli.main(["classify", "--model", str(folder), str(rendered.video), "--color", "orange", "--object-size", "0.2"])
     assert rc == 2 and "'z'" in capsys.readouterr().err
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from study import CLASSES
-from study.core.errors import ConfigError, ModelError
+from study.core.errors import ConfigError, ModelError, check_file
 from study.learn.trained import Ensemble, TrainedModel
 from study.learn.trained import load as load_model
 from study.report.text import Table
@@ -24,7 +24,33 @@ from study.see.scale import DEFAULT, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 
 TENNIS_BALL = ObjectShape("sphere", (0.067,))
-"""What a user throws unless told: a tennis ball, 6.7 cm across."""
+"""A tennis ball, 6.7 cm across."""
+
+
+class _ByColour:
+    """The default object: a tennis ball when the tracker looks for the tennis colour, else none assumed."""
+
+    def __repr__(self) -> str:
+        return "a tennis ball if the colour is tennis"
+
+
+BY_COLOUR = _ByColour()
+"""``object_shape``'s default: a tennis ball for the tennis colour, and for any other colour an error asking for
+the object's size (a tennis ball's size is never assumed for an object of another colour)."""
+
+
+def object_for(object_shape: ObjectShape | None | _ByColour, track_config: TrackConfig | None,
+               what: str = "object_shape") -> ObjectShape | None:
+    """The object the scale reads: ``object_shape`` itself, or for :data:`BY_COLOUR` a tennis ball when tracking the
+    tennis colour (``track_config``: None is the tennis colour). :class:`ConfigError` naming ``what`` otherwise."""
+    if not isinstance(object_shape, _ByColour):
+        return object_shape
+    tc = track_config or TrackConfig()
+    if tc.hsv is None and tc.color.lower() == "tennis":
+        return TENNIS_BALL
+    colour = "an HSV range" if tc.hsv is not None else f"the colour {tc.color!r}"
+    raise ConfigError(f"{what}: not given for {colour}; give the object's size in metres (and its shape), or a "
+                      "measured scale: a tennis ball's 0.067 m is assumed only for the tennis colour")
 
 
 @dataclass(frozen=True)
@@ -79,7 +105,7 @@ def _model(model: str | Path | TrainedModel | Ensemble | None,
 
 
 def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | None = None, *,
-             track_config: TrackConfig | None = None, object_shape: ObjectShape | None = TENNIS_BALL,
+             track_config: TrackConfig | None = None, object_shape: ObjectShape | None | _ByColour = BY_COLOUR,
              scale_from: str = DEFAULT, metres_per_pixel: float | None = None, rest_height: float | None = None,
              data_dir: str | Path | None = None) -> Answer:
     """Light or heavy for the throw in ``source``: a video (tracked with ``track_config``, by default a
@@ -87,7 +113,7 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
 
     ``model``: a trained Z model (a folder, or a loaded model or ensemble); None: the model the last book build in
     ``data_dir`` recommends. The scale: ``metres_per_pixel`` if you measured it, else read off ``object_shape``
-    as ``scale_from`` says ('mean': its mean apparent size; 'rest'; 'gravity'). ``rest_height``: the centre's
+    (by default a tennis ball, for the tennis colour only: :data:`BY_COLOUR`) as ``scale_from`` says ('mean': its mean apparent size; 'rest'; 'gravity'). ``rest_height``: the centre's
     height at rest, metres (default: the shape's). Raises ``ModelError`` for a model that does not read heights
     only, ``ConfigError`` for a track in pixels with nothing to scale it by, ``TrackingError`` / ``GeometryError`` /
     ``VideoError`` naming the file and what to do.
@@ -98,8 +124,11 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
                                 object_shape=study.answer.shape(0.2, "box"))
         print(answer.label, answer.p, answer.assumed)
     """
+    check_file(source, "video or trajectory CSV", "give the path of a video, or of a CSV from 'study track --out'")
+    shape_ = None if metres_per_pixel is not None and isinstance(object_shape, _ByColour) else \
+        object_for(object_shape, track_config)  # before the model: the input's problems first
     m, which = _model(model, data_dir)
-    return _answer(source, m, which, track_config, object_shape, scale_from, metres_per_pixel, rest_height)
+    return _answer(source, m, which, track_config, shape_, scale_from, metres_per_pixel, rest_height)
 
 
 def in_metres(traj: Trajectory, object_shape: ObjectShape | None, scale_from: str = DEFAULT,
@@ -176,20 +205,31 @@ class FolderAnswer:
                 "assumed": a.assumed if a else "", "error": self.error}
 
 
-def manifest_folder(manifest: str | Path) -> Path:
-    """The folder of ``manifest``: the ``MANIFEST.csv`` file itself, or the folder that holds it."""
+def manifest_folder(manifest: str | Path, what: str = "manifest") -> Path:
+    """The folder of ``manifest``: the ``MANIFEST.csv`` file itself, or the folder that holds it; :class:`DataError`
+    naming ``what`` (the option that gave it) and the path when there is neither."""
+    from study.core.errors import DataError
+
     m = Path(manifest)
-    if m.is_file() and m.name != "MANIFEST.csv":
-        raise ConfigError(f"manifest {m}: name it MANIFEST.csv, beside the videos it lists (or give their folder)")
-    return m.parent if m.is_file() else m
+    if m.is_dir():
+        return m
+    if m.suffix.lower() == ".csv" and not m.is_file():
+        raise DataError(f"{what} {m}: no such file; give the MANIFEST.csv that lists the videos, or their folder")
+    if not m.exists():
+        raise DataError(f"{what} {m}: no such file or folder; give the MANIFEST.csv that lists the videos, or "
+                        "their folder")
+    if m.name != "MANIFEST.csv":
+        raise ConfigError(f"{what} {m}: name it MANIFEST.csv, beside the videos it lists (or give their folder)")
+    return m.parent
 
 
 def classify_manifest(manifest: str | Path, model: str | Path | TrainedModel | Ensemble | None = None, *,
-                      color: str = "tennis", object_size: float = 0.067, scale_from: str = DEFAULT,
-                      data_dir: str | Path | None = None) -> list[FolderAnswer]:
+                      color: str = "tennis", object_size: float | None = None, scale_from: str = DEFAULT,
+                      data_dir: str | Path | None = None, what: str = "manifest") -> list[FolderAnswer]:
     """Every video of a ``MANIFEST.csv`` (``study.methods.videos.read_manifest``: its file, label if known, colour or
-    HSV range, size and shape; ``color`` and ``object_size`` for rows that give none) classified as :func:`classify`
-    does, by one model loaded once. A video that cannot be tracked or scaled gets its error, and the others go on.
+    HSV range, size and shape; ``color`` and ``object_size`` for rows that give none, a tennis ball's size only for
+    the tennis colour) classified as :func:`classify` does, by one model loaded once. A video that cannot be
+    tracked or scaled gets its error, and the others go on. ``what`` names the manifest in errors (``--manifest``).
 
     Example::
 
@@ -199,9 +239,10 @@ def classify_manifest(manifest: str | Path, model: str | Path | TrainedModel | E
     from study.core.errors import StudyError
     from study.methods.videos import read_manifest
 
+    videos = read_manifest(manifest_folder(manifest, what), color=color, object_size=object_size)  # before the model
     m, which = _model(model, data_dir)
     out = []
-    for v in read_manifest(manifest_folder(manifest), color=color, object_size=object_size):
+    for v in videos:
         try:
             ans = _answer(v.path, m, which, v.track_config(), v.object_shape(), scale_from, None, v.rest_height)
             out.append(FolderAnswer(v.path.name, v.label, ans))

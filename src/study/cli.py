@@ -13,6 +13,7 @@ import re
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import NoReturn
 
 from study.core import presets
 from study.core.errors import ConfigError, StudyError, check_writable, removed_on_error
@@ -25,8 +26,20 @@ def _plain(doc: str) -> str:
     return re.sub(r":\w+:`~?([^`]*)`", r"\1", doc).replace("``", "'").replace("%", "%%")
 
 
+def _lower(text: str) -> str:
+    """A choice as typed, in any case: the choices are lower case."""
+    return text.lower()
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with its errors on one line, as every other error of the command (no usage block before it)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message}; see {self.prog} --help\n")
+
+
 def _add_fields(p: argparse.ArgumentParser, cls: type, names: Sequence[str], *,
-                choices: dict[str, Sequence[str]] | None = None) -> None:
+                choices: dict[str, Sequence[str]] | None = None, more: dict[str, str] | None = None) -> None:
     """One option per field of the config dataclass ``cls``, its default, type, choices and help taken from the
     field itself (its docstring is the help, its ``Literal`` type the choices, its name the flag), so the command
     line cannot drift from the config."""
@@ -37,9 +50,10 @@ def _add_fields(p: argparse.ArgumentParser, cls: type, names: Sequence[str], *,
     allowed = {**literal_choices(cls), **(choices or {})}
     for name in names:
         default = fields[name].default
-        help_text = _plain(docs[name]) + " (default: %(default)s)"
+        help_text = _plain(docs[name]) + (more or {}).get(name, "") + " (default: %(default)s)"
         extra = {"choices": allowed[name]} if name in allowed else {}
-        p.add_argument("--" + name.replace("_", "-"), dest=name, type=type(default), default=default, help=help_text, **extra)
+        kind = _lower if name in allowed and isinstance(default, str) else type(default)  # names: any case
+        p.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=default, help=help_text, **extra)
 
 
 def _add_preset(p: argparse.ArgumentParser, what: str) -> None:
@@ -243,7 +257,9 @@ def _add_tracker_options(p: argparse.ArgumentParser) -> None:
     from study.see.config import COLORS, TrackConfig  # no OpenCV
 
     g = p.add_mutually_exclusive_group()
-    _add_fields(g, TrackConfig, ["color"], choices={"color": list(COLORS)})
+    ranges = "; ".join(f"{name} H {lo[0]}-{hi[0]}, S {lo[1]}-{hi[1]}, V {lo[2]}-{hi[2]}" for name, (lo, hi) in COLORS.items())
+    _add_fields(g, TrackConfig, ["color"], choices={"color": list(COLORS)},
+                more={"color": f" (HSV ranges, OpenCV scale: {ranges})"})
     g.add_argument("--hsv", type=float, nargs=6, metavar=("H", "S", "V", "H", "S", "V"),
                    help="explicit HSV range, low then high, OpenCV scale (H 0-179, S and V 0-255); "
                    "a low H above the high H wraps through red")
@@ -257,12 +273,12 @@ SCALE_FROM_DEFAULT = paths.DEFAULT
 """How the command line reads the scale unless told."""
 
 
-def _add_object_options(p: argparse.ArgumentParser, size_default: float | None) -> None:
+def _add_object_options(p: argparse.ArgumentParser, tennis_default: bool) -> None:
     """What was thrown, for the pixel -> metre scale (``study.see.scale``), shared by track and classify."""
-    p.add_argument("--object-size", type=float, nargs="+", default=None if size_default is None else [size_default],
-                   metavar="METRES",
+    p.add_argument("--object-size", type=float, nargs="+", default=None, metavar="METRES",
                    help="the object's size in metres: a ball's diameter; a box's edge (a cube) or its three edges; a "
-                   "cylinder's diameter and length" + ("" if size_default is None else " (default: %(default)s, a tennis ball)"))
+                   "cylinder's diameter and length" + (" (default: a tennis ball's 0.067 with --color tennis; for any "
+                                                       "other colour, required)" if tennis_default else ""))
     p.add_argument("--object-shape", choices=("ball", "box", "cylinder"), default="ball",
                    help="what was thrown (default: %(default)s); the scale reads the silhouette this shape shows")
     p.add_argument("--scale-from", choices=SCALE_FROM, default=SCALE_FROM_DEFAULT,
@@ -305,7 +321,7 @@ def _add_track(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, default=None,
                    help="write the trajectory CSV here (frame, t_s, u_px, v_px, height, status, segment, confidence)")
     p.add_argument("--overlay", type=Path, default=None, help="write a copy of the video with the track drawn (.mp4)")
-    _add_object_options(p, None)
+    _add_object_options(p, tennis_default=False)
     p.add_argument("--ground-v", type=float, default=None, help="image row of the object's centre on the ground (default: its lowest position)")
 
     def run(a: argparse.Namespace) -> int:
@@ -389,7 +405,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                    help="data folder whose recommended model to use without --model (default: $STUDY_DATA_DIR, "
                    "else data/ here)")
     _add_tracker_options(p)
-    _add_object_options(p, 0.067)
+    _add_object_options(p, tennis_default=True)
     p.add_argument("--rest-height", type=float, default=None,
                    help="height of the object's centre at rest, metres (default: from --object-size and --object-shape)")
 
@@ -404,7 +420,8 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
             return _classify_manifest(a)
         if a.out is not None:
             raise ConfigError("--out writes a manifest's answers; with one video, its answer is printed")
-        ans = answer.classify(a.input, a.model, track_config=_track_config(a), object_shape=_object_shape(a),
+        shape = _object_shape(a) or answer.BY_COLOUR  # a tennis ball, for the tennis colour only
+        ans = answer.classify(a.input, a.model, track_config=_track_config(a), object_shape=shape,
                               scale_from=a.scale_from, metres_per_pixel=a.metres_per_pixel,
                               rest_height=a.rest_height, data_dir=a.data_dir)
         for w in ans.warnings:
@@ -421,8 +438,9 @@ def _classify_manifest(a: argparse.Namespace) -> int:
 
     if a.out is not None:
         check_writable(a.out, "answers CSV")  # before the tracking, not after it
-    rows = answer.classify_manifest(a.manifest, a.model, color=a.color, object_size=a.object_size[0],
-                                    scale_from=a.scale_from, data_dir=a.data_dir)
+    rows = answer.classify_manifest(a.manifest, a.model, color=a.color,
+                                    object_size=a.object_size[0] if a.object_size else None,
+                                    scale_from=a.scale_from, data_dir=a.data_dir, what="--manifest")
     for w in next((r.answer.warnings for r in rows if r.answer), ()):  # one model answered them all
         _warn(w)
     for r in rows:
@@ -492,14 +510,14 @@ COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``study`` argument parser with every subcommand."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="study",
         description=(
             "The motion-pattern study (arXiv:1609.00361, rebuilt with MuJoCo, PyTorch and OpenCV): "
             "simulate trajectories, build the book. Run 'study COMMAND --help' for each command."
         ),
     )
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=_Parser)
     for add in COMMANDS:
         add(sub)
     return parser

@@ -13,6 +13,7 @@ other columns are kept), the real clips beside the project or the reader's own.
 from __future__ import annotations
 
 import csv
+import difflib
 import math
 import os
 from dataclasses import dataclass, field
@@ -95,7 +96,15 @@ def real_clips_dir(path: str | Path | None = None) -> Path:
     return Path(os.environ.get(REAL_CLIPS_ENV) or REAL_CLIPS_DEFAULT)
 
 
-def read_manifest(video_dir: str | Path, color: str = "tennis", object_size: float = TENNIS_BALL) -> list[Video]:
+COLUMNS = ("file", "label", "color", "object_size", "object_shape")
+"""The manifest's columns that say how a video is read."""
+NOTES = ("object", "fps", "width", "height", "frames", "source_repository", "source_commit", "source_path", "licence",
+         "notes")
+"""Columns kept as they are, in :attr:`Video.info`: what the clip shows and where it comes from."""
+
+
+def read_manifest(video_dir: str | Path, color: str = "tennis", object_size: float | None = None,
+                  what: str = "video_dir") -> list[Video]:
     """The videos listed in ``video_dir/MANIFEST.csv``, in file order. Its columns (a header row, then one row per
     video; only ``file`` is required)::
 
@@ -105,34 +114,43 @@ def read_manifest(video_dir: str | Path, color: str = "tennis", object_size: flo
         mine.mp4,,20 100 100 35 255 255,0.07,ball
 
     ``label``: light or heavy (or an alias, :data:`LABEL_ALIASES`), or empty / ``?`` / ``unknown`` where it is not
-    known; ``color``: a tracker colour (``study.see.config.COLORS``) or an HSV range, six numbers low then high
-    (default ``color``); ``object_size``: metres, a ball's diameter, a box's edge or three, a cylinder's diameter and length, separated by
-    spaces (default ``object_size``);
-    ``object_shape``: ball, box or cylinder (default ball). Other columns are kept in :attr:`Video.info`. A manifest
-    with only file and label (the older format) reads as before.
+    known; ``color``: a tracker colour (``study.see.config.COLORS``, any case) or an HSV range, six numbers low then
+    high (default ``color``); ``object_size``: metres, a ball's diameter, a box's edge or three, a cylinder's
+    diameter and length, separated by spaces (default ``object_size``; without one, a tennis ball's for the tennis
+    colour only); ``object_shape``: ball, box or cylinder (default ball). The columns of :data:`NOTES` are kept in
+    :attr:`Video.info`; any other column is refused (a misspelt header would otherwise be ignored). A manifest with
+    only file and label (the older format) reads as before. ``what`` names the folder in errors (the option or
+    parameter that gave it).
 
-    Raises :class:`DataError` for a missing folder, manifest or video, :class:`ConfigError` for an unknown label,
-    colour, shape or a bad size, naming the manifest, the row's file and what to write.
+    Raises :class:`DataError` for a missing folder, manifest or video, :class:`ConfigError` for an unknown column,
+    label, colour, shape or a bad or missing size, naming the manifest, the row's file and what to write.
     """
     d = Path(video_dir)
     m = d / "MANIFEST.csv"
     if d.is_file():
-        raise DataError(f"video_dir {d} is a file; give the folder that holds the videos and their MANIFEST.csv")
+        raise DataError(f"{what} {d} is a file; give the folder that holds the videos and their MANIFEST.csv")
     if not d.is_dir():
-        raise DataError(f"video_dir {d}: no such folder; point it at a folder of videos with a MANIFEST.csv")
+        raise DataError(f"{what} {d}: no such folder; point it at a folder of videos with a MANIFEST.csv")
     if not m.is_file():
-        raise DataError(f"video_dir {d}: no MANIFEST.csv; write one with the columns file,label (and optionally "
+        raise DataError(f"{what} {d}: no MANIFEST.csv; write one with the columns file,label (and optionally "
                         "color,object_size,object_shape)")
-    rows = list(csv.DictReader(m.open(newline="")))
+    reader = csv.DictReader(m.open(newline=""))
+    rows = list(reader)
     if not rows or "file" not in rows[0]:
         raise DataError(f"manifest {m}: needs a header with at least the column file, and one row per video")
+    for column in reader.fieldnames or ():
+        if column not in COLUMNS + NOTES:
+            near = difflib.get_close_matches(column, COLUMNS + NOTES, n=1)
+            raise ConfigError(f"manifest {m}: column {column!r} is unknown" + (f" (did you mean {near[0]!r}?)" if near
+                              else "") + f"; its columns are {', '.join(COLUMNS)} (and, kept as notes, "
+                              f"{', '.join(NOTES)})")
     out = []
     for r in rows:
         out.append(_manifest_row(m, {k: (v or "").strip() for k, v in r.items() if k is not None}, color, object_size))
     return sorted(out, key=lambda v: v.path.name)
 
 
-def _manifest_row(m: Path, r: dict[str, str], color: str, object_size: float) -> Video:
+def _manifest_row(m: Path, r: dict[str, str], color: str, object_size: float | None) -> Video:
     """One row of :func:`read_manifest`'s manifest ``m`` as a :class:`Video`."""
     where = f"manifest {m}, {r['file'] or 'a row without a file'}"
     raw = r.get("label", "").lower()
@@ -143,7 +161,7 @@ def _manifest_row(m: Path, r: dict[str, str], color: str, object_size: float) ->
     p = m.parent / r["file"]
     if not r["file"] or not p.is_file():
         raise DataError(f"{where}: listed but not in {m.parent}")
-    colour, hsv = r.get("color") or color, None
+    colour, hsv = (r.get("color") or color).lower(), None
     if any(c.isdigit() for c in colour):
         try:
             hsv = tuple(int(float(x)) for x in colour.replace(",", " ").split())
@@ -152,11 +170,18 @@ def _manifest_row(m: Path, r: dict[str, str], color: str, object_size: float) ->
         if len(hsv) != 6:
             raise ConfigError(f"{where}: color {colour!r}; give a colour name ({', '.join(COLORS)}) or an HSV range "
                               "of six numbers, low H S V then high H S V")
-        colour = color
+        colour = color.lower()
     elif colour not in COLORS:
         raise ConfigError(f"{where}: color {colour!r} is unknown; use one of {', '.join(COLORS)} or six HSV numbers")
+    given = r.get("object_size") or ("" if object_size is None else str(object_size))
+    if not given:
+        if colour != "tennis" or hsv is not None:
+            raise ConfigError(f"{where}: no object_size for an object that is not tennis-yellow; give its size in metres "
+                              "(the column object_size, or for every row --object-size): a tennis ball's 0.067 is "
+                              "assumed only for the tennis colour")
+        given = str(TENNIS_BALL)
     try:
-        sizes = tuple(float(x) for x in (r.get("object_size") or str(object_size)).split())
+        sizes = tuple(float(x) for x in given.split())
     except ValueError:
         sizes = ()
     if not sizes or not all(0.001 <= x <= 10.0 for x in sizes):
@@ -175,7 +200,7 @@ def _manifest_row(m: Path, r: dict[str, str], color: str, object_size: float) ->
     return v
 
 
-def real_clips(video_dir: str | Path = "", color: str = "tennis", object_size: float = TENNIS_BALL,
+def real_clips(video_dir: str | Path = "", color: str = "tennis", object_size: float | None = None,
                limit: int | None = None) -> list[Video]:
     """The real clips the chapter classifies: those of ``video_dir``'s manifest (:func:`read_manifest`), or, with
     no ``video_dir``, of :func:`real_clips_dir`'s folder if it holds a manifest (none there: no real clips); the

@@ -42,7 +42,7 @@ class TrackConfig:
     """
 
     color: str = "tennis"
-    """Name of a colour in :data:`COLORS` (ignored when ``hsv`` is given)."""
+    """Name of a colour in :data:`COLORS`, in any case (ignored when ``hsv`` is given)."""
     hsv: tuple[int, int, int, int, int, int] | None = None
     """Explicit HSV bounds (H, S, V low, then H, S, V high), OpenCV scale; overrides ``color``."""
     min_area: int = 4
@@ -77,9 +77,10 @@ class TrackConfig:
         """(low, high) HSV bounds as uint8 arrays of 3; raise :class:`ConfigError` if malformed."""
         if self.hsv is not None:
             return parse_hsv(self.hsv)
-        if self.color not in COLORS:
+        name = self.color.lower()  # a colour's name in any case
+        if name not in COLORS:
             raise ConfigError(f"color = {self.color!r} is not a known colour; choose one of {', '.join(COLORS)} or give --hsv")
-        lo, hi = COLORS[self.color]
+        lo, hi = COLORS[name]
         return parse_hsv((*lo, *hi))
 
     def validate(self) -> None:
