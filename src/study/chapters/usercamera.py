@@ -199,8 +199,13 @@ class UserCamera:
         def span(r: tuple[float, float], unit: str) -> str:
             return f"{r[0]:g}–{r[1]:g}{unit}"
 
-        return "; ".join(f"*{f.key}* ({span(f.height, ' m')} up, tilted {span(f.tilt, '°')}, yawed "
-                         f"{span(f.yaw, '°')}, {span(f.distance, ' m')} away)" for f in CAMERA_FAMILIES)
+        families = "; ".join(f"*{f.key}* ({span(f.height, ' m')} up, tilted {span(f.tilt, '°')}, yawed "
+                             f"{span(f.yaw, '°')}, {span(f.distance, ' m')} away)" for f in CAMERA_FAMILIES)
+        sizes = " or ".join(f"{h}p" for h in sorted({h for _, h in sweep.SIZES}))
+        rates = " or ".join(f"{r:g}" for r in sweep.RATES)
+        return (f"{families}; each at {span(sweep.FOV, '°')} field of view, {sizes}, {rates} frames a second, the "
+                f"object's colour drawn, a camera kept only if the object stays in the picture and at least "
+                f"{sweep.MIN_PIXELS:g} pixels wide")
 
     @property
     def sweep_words(self) -> str:
