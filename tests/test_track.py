@@ -346,3 +346,34 @@ def test_reusing_the_image_of_a_resting_object_leaves_the_video_unchanged(tmp_pa
     assert fast.reused >= 8 and fast.drawn + fast.reused == slow.drawn == 2 * 30 and slow.reused == 0
     assert fast.truth.read_bytes() == slow.truth.read_bytes()
     assert fast.video.read_bytes() == slow.video.read_bytes()
+
+
+def test_track_and_classify_through_a_floor_the_user_marked(rendered, tmp_path, z_model, capsys):
+    """A FLOOR.csv of six marks around the throw, clicked a pixel off: `study track --floor` gives the rendered
+    throw's heights to centimetres at 320 x 240, and `study classify --floor` answers saying what the floor gave."""
+    cam = render.scene_camera(render.class_model("light"), "side", 320, 240)
+    mid = rendered.xyz[:, :2].mean(axis=0)
+    xy = mid + np.array([[-1.0, -0.5], [1.0, -0.5], [1.0, 0.5], [-1.0, 0.5], [0.0, -0.5], [0.0, 0.5]])
+    px = cam.project(np.column_stack([xy, np.zeros(6)])) + np.random.default_rng(0).normal(0, 1.0, (6, 2))
+    marks = tmp_path / "FLOOR.csv"
+    marks.write_text("u,v,x,y\n" + "".join(f"{u:.2f},{v:.2f},{x:.3f},{y:.3f}\n" for (u, v), (x, y) in zip(px, xy)))
+    out = tmp_path / "t.csv"
+    rc = cli.main(["track", str(rendered.video), "--color", "orange", "--object-size", "0.2", "--object-shape", "box",
+                   "--floor", str(marks), "--out", str(out), "--no-progress"])
+    said = capsys.readouterr().out
+    assert rc == 0 and "camera from 6 floor marks" in said and "px RMS reprojection" in said, said
+    got = track.read_csv(out)
+    z = got.height + 0.1  # the centre above the floor: the box's rest height is half its edge
+    truth = np.interp(got.t, rendered.t, rendered.xyz[:, 2])
+    ok = np.isfinite(z) & got.measured
+    assert ok.mean() > 0.8 and np.sqrt(np.mean((z[ok] - truth[ok]) ** 2)) < 0.05
+    folder, _ = z_model
+    rc = cli.main(["classify", str(rendered.video), "--model", str(folder), "--color", "orange", "--object-size",
+                   "0.2", "--object-shape", "box", "--floor", str(marks), "--no-progress"])
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert rc == 0 and "camera from 6 floor marks" in lines[-1] and "the flights between them" in lines[-1], lines
+    rc = cli.main(["track", str(rendered.video), "--color", "orange", "--floor", str(marks), "--no-progress"])
+    assert rc == 2 and "--floor: give the object's size" in capsys.readouterr().err
+    marks.write_text("u,v,x,y\n1,2,3,4\n")
+    rc = cli.main(["track", str(rendered.video), "--color", "orange", "--object-size", "0.2", "--floor", str(marks)])
+    assert rc == 2 and "1 marks; give at least 4" in capsys.readouterr().err

@@ -19,7 +19,9 @@ from study.learn.trained import Ensemble, TrainedModel
 from study.learn.trained import load as load_model
 from study.report.text import Table
 from study.see import track
+from study.runs.stats import label_of
 from study.see.config import TrackConfig
+from study.see.floor import Floor, on_floor, read_floor
 from study.see.scale import DEFAULT, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 
@@ -107,14 +109,16 @@ def _model(model: str | Path | TrainedModel | Ensemble | None,
 def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | None = None, *,
              track_config: TrackConfig | None = None, object_shape: ObjectShape | None | _ByColour = BY_COLOUR,
              scale_from: str = DEFAULT, metres_per_pixel: float | None = None, rest_height: float | None = None,
-             data_dir: str | Path | None = None) -> Answer:
+             data_dir: str | Path | None = None, floor: str | Path | Floor | None = None) -> Answer:
     """Light or heavy for the throw in ``source``: a video (tracked with ``track_config``, by default a
     tennis-yellow ball) or a trajectory CSV from ``study track --out`` (pixels are scaled as a video's are).
 
     ``model``: a trained Z model (a folder, or a loaded model or ensemble); None: the model the last book build in
     ``data_dir`` recommends. The scale: ``metres_per_pixel`` if you measured it, else read off ``object_shape``
     (by default a tennis ball, for the tennis colour only: :data:`BY_COLOUR`) as ``scale_from`` says ('mean': its mean apparent size; 'rest'; 'gravity'). ``rest_height``: the centre's
-    height at rest, metres (default: the shape's). Raises ``ModelError`` for a model that does not read heights
+    height at rest, metres (default: the shape's). ``floor``: a ``FLOOR.csv`` of four or more floor marks (their
+    pixels and positions, ``study.see.floor.read_floor``), or the marks: the camera they give places each frame's
+    centre (no one scale; the size then sets only the rest height). Raises ``ModelError`` for a model that does not read heights
     only, ``ConfigError`` for a track in pixels with nothing to scale it by, ``TrackingError`` / ``GeometryError`` /
     ``VideoError`` naming the file and what to do.
 
@@ -127,8 +131,9 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
     check_file(source, "video or trajectory CSV", "give the path of a video, or of a CSV from 'study track --out'")
     shape_ = None if metres_per_pixel is not None and isinstance(object_shape, _ByColour) else \
         object_for(object_shape, track_config)  # before the model: the input's problems first
+    marks = read_floor(floor) if isinstance(floor, (str, Path)) else floor
     m, which = _model(model, data_dir)
-    return _answer(source, m, which, track_config, shape_, scale_from, metres_per_pixel, rest_height)
+    return _answer(source, m, which, track_config, shape_, scale_from, metres_per_pixel, rest_height, marks)
 
 
 def in_metres(traj: Trajectory, object_shape: ObjectShape | None, scale_from: str = DEFAULT,
@@ -151,7 +156,7 @@ def in_metres(traj: Trajectory, object_shape: ObjectShape | None, scale_from: st
 
 def _answer(source: str | Path, m: TrainedModel | Ensemble, which: str, track_config: TrackConfig | None,
             object_shape: ObjectShape | None, scale_from: str, metres_per_pixel: float | None,
-            rest_height: float | None) -> Answer:
+            rest_height: float | None, floor: Floor | None = None) -> Answer:
     """:func:`classify` with the model loaded (``which`` names it)."""
     if m.dims != "z":
         raise ModelError(f"{which} was trained on {m.dims!r}; one camera gives only the height: use a model trained "
@@ -159,17 +164,22 @@ def _answer(source: str | Path, m: TrainedModel | Ensemble, which: str, track_co
     path = Path(source)
     pixels = (track.read_csv(path) if path.suffix.lower() == ".csv" else
               track.track_video(path, track_config or TrackConfig()))  # pixels: scaled once, below
-    traj, scale = in_metres(pixels, object_shape, scale_from, metres_per_pixel)
     rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0
+    if floor is not None:  # the camera the floor marks give: each frame's own depth
+        traj, cal = on_floor(pixels, floor, rest)
+        how = (f"{cal.note()}; each frame's centre from the contacts and the flights between them, the centre "
+               f"{rest:.3f} m up at rest")
+    else:
+        traj, scale = in_metres(pixels, object_shape, scale_from, metres_per_pixel)
+        how = (f"{scale}; the ground at the lowest centre (row {traj.ground_v:.0f}), one scale for the whole video "
+               f"(the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m up at rest")
     x = track.to_model_input(traj, m.fps, m.n_frames, rest_height=rest)
     p = m.predict_proba(x[None])[0]
-    k = int(p.argmax())
+    k = label_of(float(p[1]))
     piece = traj.longest()
     members = m.members if isinstance(m, Ensemble) else (m,)
-    assumed = (f"{scale}; the ground at the lowest centre (row {traj.ground_v:.0f}), one scale for the whole video "
-               f"(the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m up at rest; "
-               f"read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames found, "
-               f"{len(traj.segments())} piece(s)")
+    assumed = (f"{how}; read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames "
+               f"found, {len(traj.segments())} piece(s)")
     warnings = tuple(f"{which}: {mm.failure()}; its answers are near chance" for mm in members if mm.failed)
     return Answer(str(source), CLASSES[k], float(p[k]), float(p[1]), which, assumed, traj, warnings)
 

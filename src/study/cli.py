@@ -287,6 +287,11 @@ def _add_object_options(p: argparse.ArgumentParser, tennis_default: bool) -> Non
                    "the free flights' fall, 9.81 m/s^2; needs the object seen in the air) (default: %(default)s)")
     p.add_argument("--metres-per-pixel", type=float, default=None,
                    help="the image scale at the object's distance, if you measured it; overrides --object-size")
+    p.add_argument("--floor", type=Path, default=None, metavar="FLOOR.csv",
+                   help="four or more marks on the floor (five or more recommended): a CSV with the header u,v,x,y, "
+                   "one row per mark, its pixel in the video (u right, v down, the top-left pixel's centre at 0,0) "
+                   "and its position on the floor in metres. The camera they give places each frame's centre (its "
+                   "contacts on the floor, its flights between them) instead of one scale for the whole video")
 
 
 def _object_shape(a: argparse.Namespace):
@@ -294,6 +299,22 @@ def _object_shape(a: argparse.Namespace):
     from study.answer import shape
 
     return shape(tuple(a.object_size), a.object_shape) if a.object_size else None
+
+
+def _on_floor(pixels, a: argparse.Namespace):
+    """``study track --floor``: the pixel track with heights through the camera the floor marks give; prints what
+    the floor says of the camera."""
+    from study.core.errors import ConfigError
+    from study.see.floor import on_floor, read_floor
+
+    marks = read_floor(a.floor)  # before anything else can fail
+    shape = _object_shape(a)
+    if shape is None:
+        raise ConfigError("--floor: give the object's size (--object-size, and --object-shape) for the height of its "
+                          "centre when it lies on the floor")
+    traj, cal = on_floor(pixels, marks, shape.rest_height())
+    print(f"{a.video}: {cal.note()}")
+    return traj
 
 
 def _track_config(a: argparse.Namespace):
@@ -331,8 +352,11 @@ def _add_track(sub: argparse._SubParsersAction) -> None:
             for path, what in ((a.out, "trajectory CSV"), (a.overlay, "overlay video")):
                 if path is not None:
                     check_writable(path, what)  # before the tracking, not after it
-            traj = track.track_video(a.video, _track_config(a), ground_v=a.ground_v, shape=_object_shape(a),
-                                     scale_from=a.scale_from, metres_per_pixel=a.metres_per_pixel)
+            if a.floor is not None:
+                traj = _on_floor(track.track_video(a.video, _track_config(a)), a)
+            else:
+                traj = track.track_video(a.video, _track_config(a), ground_v=a.ground_v, shape=_object_shape(a),
+                                         scale_from=a.scale_from, metres_per_pixel=a.metres_per_pixel)
             if a.out:
                 track.write_csv(traj, a.out)
             if a.overlay:
@@ -423,7 +447,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         shape = _object_shape(a) or answer.BY_COLOUR  # a tennis ball, for the tennis colour only
         ans = answer.classify(a.input, a.model, track_config=_track_config(a), object_shape=shape,
                               scale_from=a.scale_from, metres_per_pixel=a.metres_per_pixel,
-                              rest_height=a.rest_height, data_dir=a.data_dir)
+                              rest_height=a.rest_height, data_dir=a.data_dir, floor=a.floor)
         for w in ans.warnings:
             _warn(w)
         print(ans)

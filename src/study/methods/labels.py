@@ -23,6 +23,7 @@ from study.learn.metrics import Interval, wilson
 from study.learn.trained import Ensemble
 from study.methods import camera_cost, tracker
 from study.methods.videos import Video
+from study.runs.stats import label_of
 from study.see import render, scale, track
 from study.simulate import measure
 
@@ -149,7 +150,7 @@ def classify(
         p = np.asarray(model.predict_proba(x[None]))[0]
         out.append(Label(v.path.name, v.label, "", len(traj.t), traj.found_fraction, int(traj.filled.sum()),
                          len(traj.segments()), measure.bounce_count(piece.height) if piece.units == "m" else None,
-                         traj.height_per_pixel, float(p[0]), float(p[1]), CLASSES[int(np.argmax(p))]))
+                         traj.height_per_pixel, float(p[0]), float(p[1]), CLASSES[label_of(float(p[1]))]))
     return out
 
 

@@ -97,6 +97,11 @@ def probabilities(models: Sequence[Any], x: np.ndarray, frames: bool = False) ->
     return np.stack([np.asarray(m.predict_proba(x))[:, 1] for m in models])
 
 
+def label_of(p_heavy: float) -> int:
+    """The class a p(heavy) says: 1 (heavy) above 1/2, else 0 (light): the one rule every score and answer uses."""
+    return int(p_heavy > 0.5)
+
+
 def correct_of(models: Sequence[Any], x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """(S, n) bool: model s labelled trajectory i of ``x`` (n, T, 3) right (:func:`probabilities` above 1/2 for
     heavy)."""

@@ -110,21 +110,22 @@ def _up(tilt: float, roll: float) -> np.ndarray:
     return np.array([math.sin(roll) * math.cos(tilt), math.cos(roll) * math.cos(tilt), math.sin(tilt)])
 
 
-def phases(t: np.ndarray, v: np.ndarray, scale: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+def phases(t: np.ndarray, v: np.ndarray, scale: np.ndarray, most: float = 1.8) -> tuple[list[np.ndarray], np.ndarray]:
     """The free flights and the ground frames, from the image alone.
 
     ``t`` (n,) seconds, ``v`` (n,) image rows, ``scale`` (n,) metres per pixel at the object (its size over its
     apparent diameter). A frame whose 5-frame image curvature, in metres, is a downward acceleration between 0.35 g
     and 1.8 g is in flight (a camera tilted 70 degrees still sees a third of g); one whose curvature is within
-    0.25 g of none is rolling, sliding or resting: on the ground. Returns the flights (index arrays, each a run of
-    flight frames widened by a frame on each side, at least :data:`MIN_ARC` long) and the ground mask (n,) bool."""
+    0.25 g of none is rolling, sliding or resting: on the ground. ``most``: the upper bound, in g (infinite where
+    ``scale`` only bounds the true scale from above). Returns the flights (index arrays, each a run of flight frames
+    widened by a frame on each side, at least :data:`MIN_ARC` long) and the ground mask (n,) bool."""
     n = len(t)
     ratio = np.full(n, np.nan)
     for i in range(2, n - 2):
         w = slice(i - 2, i + 3)
         if np.isfinite(v[w]).all():
             ratio[i] = 2 * np.polyfit(t[w] - t[i], v[w], 2)[0] * scale[i] / G  # image rows grow downwards
-    flight = (ratio > 0.35) & (ratio < 1.8)
+    flight = (ratio > 0.35) & (ratio < most)
     kink = ratio < -0.35
     arcs = []
     for run in _runs(flight):

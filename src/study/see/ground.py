@@ -47,13 +47,13 @@ def camera_from_floor(pixels: np.ndarray, floor: np.ndarray, width: int, height:
     c = np.array([[1.0, 0.0, -(width / 2 - 0.5)], [0.0, 1.0, -(height / 2 - 0.5)], [0.0, 0.0, 1.0]])
     a = c @ h  # the principal point moved to the origin: a = lambda diag(f, f, 1) [r1 r2 t]
     (a11, a12, _), (a21, a22, _), (a31, a32, _) = a
-    f2 = []
-    if abs(a31 * a32) > 1e-12:
-        f2.append(-(a11 * a12 + a21 * a22) / (a31 * a32))
-    if abs(a31**2 - a32**2) > 1e-12:
-        f2.append(((a12**2 + a22**2) - (a11**2 + a21**2)) / (a31**2 - a32**2))
-    good = [x for x in f2 if x > 0 and math.isfinite(x)]
-    f = math.sqrt(good[0]) if good else 0.5 * height / math.tan(math.radians(DEFAULT_FOVY) / 2)
+    # Zhang's two constraints are linear in w = 1/f^2 (r1 . r2 = 0, |r1| = |r2|); each is ill-conditioned where its
+    # perspective term vanishes (a floor axis along the image rows, or at 45 degrees), so w is their least squares.
+    coef = np.array([a11 * a12 + a21 * a22, a11**2 + a21**2 - a12**2 - a22**2])
+    rhs = -np.array([a31 * a32, a31**2 - a32**2])
+    w = float(coef @ rhs / (coef @ coef)) if coef @ coef > 0 else math.nan
+    fixed = math.isfinite(w) and w > 0 and np.abs(rhs).max() > 1e-9 * (np.abs(coef).max() + 1e-300)
+    f = 1.0 / math.sqrt(w) if fixed else 0.5 * height / math.tan(math.radians(DEFAULT_FOVY) / 2)
     k_inv = np.diag([1 / f, 1 / f, 1.0])
     m = k_inv @ a
     lam = 1.0 / np.linalg.norm(m[:, 0])

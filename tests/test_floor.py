@@ -1,0 +1,108 @@
+"""A camera the floor calibrates (study.see.floor): floor marks read strictly, the camera recovered from them, and a
+tumbling throw's heights from its pixels -- one that leaves its vertical plane at every bounce, which the one-plane
+path (study.see.ground) cannot follow. Inline scenes: the camera and the throw are made here, the answer known."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from study.core.errors import ConfigError, DataError
+from study.methods import sweep
+from study.see import floor
+from study.see.geometry import G
+
+REST = 0.1
+
+
+def tumbling_throw(fps: float = 60.0, seconds: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
+    """Times (n,) and centres (n, 3) metres of a throw that turns at each bounce (its horizontal velocity swung by
+    25 degrees and slowed), then slides to rest: never in one vertical plane."""
+    dt = 1.0 / fps / 40
+    p, vel = np.array([-1.0, -0.2, 1.0]), np.array([1.6, 0.2, 1.0])
+    out, turn = [], 1.0
+    for _ in range(int(fps * seconds)):
+        out.append(p.copy())
+        for _ in range(40):
+            if p[2] > REST or vel[2] > 0:
+                vel[2] -= G * dt
+            else:  # sliding: friction slows it
+                h = np.linalg.norm(vel[:2])
+                vel[:2] *= max(0.0, h - 3.0 * dt) / h if h > 0 else 0.0
+            p = p + vel * dt
+            if p[2] < REST:
+                p[2] = REST
+                if vel[2] < -0.6:  # a bounce: up again, turned
+                    c, s = np.cos(np.radians(25 * turn)), np.sin(np.radians(25 * turn))
+                    vel[:2] = 0.7 * np.array([[c, -s], [s, c]]) @ vel[:2]
+                    vel[2], turn = -0.5 * vel[2], -turn
+                else:
+                    vel[2] = 0.0
+    return np.arange(len(out)) / fps, np.array(out)
+
+
+def scene(height: float, tilt: float, yaw: float, path: np.ndarray):
+    shot = sweep.Shot(family="test", height=height, tilt=tilt, yaw=yaw, distance=4.0, fov=60.0, width=1280,
+                      height_px=720, fps=60.0, colour="red", floor=sweep.FLOORS[0], light=0.8)
+    return sweep.camera(shot, path)
+
+
+def marks(cam, path: np.ndarray, noise: float, k: int = 6, seed: int = 0) -> floor.Floor:
+    """``k`` floor marks around the throw (a 2 m x 1.5 m rectangle's corners, then points on its sides), their pixels
+    as a careful click gives them: the exact projection plus ``noise`` pixels."""
+    mid = path[:, :2].mean(axis=0)
+    xy = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])[:k] + mid
+    px = cam.project(np.column_stack([xy, np.zeros(k)]))
+    return floor.Floor(px + np.random.default_rng(seed).normal(0.0, noise, px.shape), xy)
+
+
+@pytest.mark.parametrize("height, tilt, yaw", [(1.0, 5.0, 0.0), (1.7, 30.0, -45.0), (2.0, 40.0, 30.0),
+                                               (0.6, 10.0, 50.0)])
+def test_a_floor_calibrated_camera_gives_a_tumbling_throws_heights(height, tilt, yaw):
+    t, path = tumbling_throw()
+    cam = scene(height, tilt, yaw, path)
+    assert np.ptp(path[:, 1]) > 0.1, "the throw leaves its vertical plane"
+    cal = floor.calibrate(marks(cam, path, 0.0), cam.width, cam.height)
+    np.testing.assert_allclose(cal.camera.position, cam.position, atol=1e-4)
+    assert cal.reprojection_px < 1e-3 and "camera from 6 floor marks" in cal.note()
+    uv = cam.project(path)
+    z = floor.heights(cal.camera, t, uv[:, 0], uv[:, 1], REST)
+    assert np.isfinite(z).mean() > 0.95
+    assert np.sqrt(np.nanmean((z - path[:, 2]) ** 2)) < 0.01, "exact marks and pixels: under a centimetre"
+    noisy = floor.calibrate(marks(cam, path, 1.0), cam.width, cam.height)
+    jitter = np.random.default_rng(1).normal(0.0, 0.3, uv.shape)  # a tracker's sub-pixel centroid
+    z = floor.heights(noisy.camera, t, uv[:, 0] + jitter[:, 0], uv[:, 1] + jitter[:, 1], REST)
+    assert np.sqrt(np.nanmean((z - path[:, 2]) ** 2)) < 0.03, "a pixel's clicking error: centimetres"
+    assert 0.3 < noisy.reprojection_px < 3
+
+
+def test_a_bad_floor_is_refused_naming_the_file_and_the_problem(tmp_path):
+    f = tmp_path / "FLOOR.csv"
+    with pytest.raises(DataError, match="FLOOR.csv: no such file; write a CSV with the header u,v,x,y"):
+        floor.read_floor(f)
+    f.write_text("")
+    with pytest.raises(DataError, match="empty"):
+        floor.read_floor(f)
+    f.write_text("x,y,u,v\n1,2,3,4\n")
+    with pytest.raises(ConfigError, match="header 'x,y,u,v'; it must be u,v,x,y"):
+        floor.read_floor(f)
+    f.write_text("u,v,x,y\n1,2,3,four\n")
+    with pytest.raises(ConfigError, match="line 2: '1,2,3,four' is not four numbers"):
+        floor.read_floor(f)
+    f.write_text("u,v,x,y\n10,10,0,0\n20,10,1,0\n20,20,1,1\n")
+    with pytest.raises(ConfigError, match="3 marks; give at least 4"):
+        floor.read_floor(f)
+    f.write_text("u,v,x,y\n10,10,0,0\n20,10,1,0\n30,10,2,0\n40,10,3,0\n")
+    with pytest.raises(ConfigError, match="on one line on the floor"):
+        floor.read_floor(f)
+    t, path = tumbling_throw()
+    cam = scene(1.7, 30.0, -45.0, path)
+    four = marks(cam, path, 0.0, k=4)
+    f.write_text("u,v,x,y\n" + "".join(f"{u},{v},{x},{y}\n" for (u, v), (x, y) in zip(four.pixels, four.points)))
+    read = floor.read_floor(f)
+    assert "four marks fit any camera exactly" in floor.calibrate(read, cam.width, cam.height).note()
+    with pytest.raises(ConfigError, match=r"mark \d at pixel \(.*\) is outside the 320 x 240 image"):
+        floor.calibrate(read, 320, 240)
+    upside_down = floor.Floor(np.column_stack([read.pixels[:, 0], cam.height - 1 - read.pixels[:, 1]]), read.points)
+    with pytest.raises(ConfigError, match="below the floor"):  # the image flipped: the floor is seen from beneath
+        floor.calibrate(upside_down, cam.width, cam.height)
