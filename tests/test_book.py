@@ -421,7 +421,7 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
     from study.runs import recommended
 
     rec = recommended.read(tmp_path / "data")  # the model `study classify` uses without --model
-    assert rec.preset == "smoke" and all(m.is_dir() for m in rec.models)
+    assert rec.preset == "smoke" and rec.key and all(m.is_dir() for m in rec.path().models)
     assert not again["table1"]["cached"] and "waited" not in again["table1"]
     index = tmp_path / "_build" / "html" / "book" / "intro.html"
     assert "The motion-pattern study" in index.read_text()
@@ -456,8 +456,8 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
     assert len(decided) >= 15 and results.recompute(built) == [], "every verdict follows from its stored inputs"
     page = summary.compute(tmp_path / results.FILE, "smoke")  # the summary page's rows, read as typed results
     assert page.chapters.unread(built) == [], "every learner, protocol, family and path written is read back"
-    added = {**built, "realworld.sweep.fisheye.clips": built["realworld.sweep.low.clips"]}  # a family not defined
-    assert page.chapters.unread(added) == ["realworld.sweep.fisheye.clips"], "so a family added by hand is caught"
+    added = {**built, "usercamera.sweep.fisheye.clips": built["usercamera.sweep.low.clips"]}  # a family not defined
+    assert page.chapters.unread(added) == ["usercamera.sweep.fisheye.clips"], "so a family added by hand is caught"
     assert len(page.rows) == len(summary.ROWS) and all(r.verdict for r in page.rows)
     assert all(r.ours for r in page.rows if r.kind in ("number", "order")), "every row of the summary has its number"
     assert f"Of its {len(page.rows)} tables, figures and claims" in page.findings, "the findings count every row"

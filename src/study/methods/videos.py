@@ -99,8 +99,9 @@ def real_clips_dir(path: str | Path | None = None) -> Path:
 COLUMNS = ("file", "label", "color", "object_size", "object_shape")
 """The manifest's columns that say how a video is read."""
 NOTES = ("object", "fps", "width", "height", "frames", "source_repository", "source_commit", "source_path", "licence",
-         "notes")
-"""Columns kept as they are, in :attr:`Video.info`: what the clip shows and where it comes from."""
+         "notes", "family")
+"""Columns kept as they are, in :attr:`Video.info`: what the clip shows and where it comes from (a camera sweep's
+clips: their camera family)."""
 
 
 def read_manifest(video_dir: str | Path, color: str = "tennis", object_size: float | None = None,
