@@ -104,12 +104,14 @@ def main() -> None:
     ap.add_argument("--click-px", type=float, default=1.0, help="the user's clicking error, pixels (std)")
     ap.add_argument("--render", type=int, default=0, metavar="N", help="render N clips a family first (into --out)")
     ap.add_argument("--out", type=Path, default=Path("/tmp/floor-sweep"), help="where --render puts the clips")
+    ap.add_argument("--seed", type=int, default=sweep.SWEEP_SEED,
+                    help="seed of the rendered throws and shots (default: the sweep's own; develop on another)")
     a = ap.parse_args()
     folder = a.folder
     if a.render:
         from study.simulate import synth
 
-        clips = sweep.sweep_set(synth.SynthConfig.preset("paper"), per_family=a.render, seed=sweep.SWEEP_SEED,
+        clips = sweep.sweep_set(synth.SynthConfig.preset("paper"), per_family=a.render, seed=a.seed,
                                 out_dir=a.out, progress=True)
         folder = clips[0].video.path.parent
     if folder is None:

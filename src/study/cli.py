@@ -291,7 +291,9 @@ def _add_object_options(p: argparse.ArgumentParser, tennis_default: bool) -> Non
                    help="four or more marks on the floor (five or more recommended): a CSV with the header u,v,x,y, "
                    "one row per mark, its pixel in the video (u right, v down, the top-left pixel's centre at 0,0) "
                    "and its position on the floor in metres. The camera they give places each frame's centre (its "
-                   "contacts on the floor, its flights between them) instead of one scale for the whole video")
+                   "contacts on the floor, its flights between them) instead of one scale for the whole video. "
+                   "Experimental: on rendered video its heights are not yet as close as on clean pixels "
+                   "(scripts/floor_sweep.py measures them)")
 
 
 def _object_shape(a: argparse.Namespace):
