@@ -106,3 +106,15 @@ def test_a_bad_floor_is_refused_naming_the_file_and_the_problem(tmp_path):
     upside_down = floor.Floor(np.column_stack([read.pixels[:, 0], cam.height - 1 - read.pixels[:, 1]]), read.points)
     with pytest.raises(ConfigError, match="below the floor"):  # the image flipped: the floor is seen from beneath
         floor.calibrate(upside_down, cam.width, cam.height)
+
+
+def test_a_flight_whose_landing_is_never_seen_is_left_unknown_not_put_on_the_floor():
+    """Cut before the first landing: a flight and no contact. Its frames cannot be placed; none is reported at rest."""
+    t, path = tumbling_throw()
+    cam = scene(1.7, 30.0, -45.0, path)
+    cal = floor.calibrate(marks(cam, path, 0.0), cam.width, cam.height)
+    z = path[:, 2]
+    first = int(np.flatnonzero((z[1:-1] < z[:-2]) & (z[1:-1] < z[2:]))[0]) + 1  # the first landing
+    uv = cam.project(path[: first - 3])
+    got = floor.heights(cal.camera, t[: first - 3], uv[:, 0], uv[:, 1], REST)
+    assert not np.any(np.isclose(got, REST)), "a flight is not on the floor"

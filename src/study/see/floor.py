@@ -288,6 +288,10 @@ def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_he
     # than where its ray meets the plane), so a flight's curvature may read above g: no upper bound.
     arcs, _ = phases(t, _smoothed(t, v, SMOOTH_S), depth / camera.focal, most=math.inf)
     arcs = [a[1:-1] for a in arcs if len(a) > 4]  # the flight frames proper (an arc's ends straddle a contact)
+    if arcs and arcs[0][0] <= 3:  # a track that starts (or ends) in the air: its first frames' curvature is unknown
+        arcs[0] = np.arange(0, arcs[0][-1] + 1)
+    if arcs and arcs[-1][-1] >= n - 4:
+        arcs[-1] = np.arange(arcs[-1][0], n)
     out = np.full((n, 3), np.nan)
     ground = on_plane.copy()
     if arcs:
@@ -300,10 +304,13 @@ def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_he
             point = _on_plane(camera, np.array([uc]), np.array([vc]), rest_height)[0]
             if np.isfinite(point).all():
                 contacts.append((tc, point))
-        times = np.array([c[0] for c in contacts])
-        last = times[-1] if len(times) else -math.inf
-        ground = on_plane & (t > last)  # the slide after the last contact (or every frame, with none)
-        for k in range(len(contacts) + 1):  # the flights: before the first contact, then between contacts
+        if not contacts:  # flights, but no contact seen: the flights cannot be placed, the rest is on the ground
+            in_arc = np.zeros(n, bool)
+            in_arc[np.concatenate(arcs)] = True
+            ground = on_plane & ~in_arc
+        else:
+            ground = on_plane & (t > contacts[-1][0])  # the slide after the last contact
+        for k in range(len(contacts) + 1 if contacts else 0):  # the flights: before the first contact, then between
             lo = contacts[k - 1][0] if k > 0 else -math.inf
             hi = contacts[k][0] if k < len(contacts) else math.inf
             inside = np.flatnonzero((t > lo) & (t <= hi) & ~ground)
