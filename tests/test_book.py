@@ -433,6 +433,7 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
         assert "Figure size" not in text, f"{ch.stem}: a figure was rendered as text"
         assert "injected by papermill" not in text.lower() and "# Parameters" not in text, ch.stem
         if ch.source.read_text().startswith("---\njupytext"):
+            assert "preset, a small run for tests" in text, f"{ch.stem}: a smoke page must say so at its top"
             nb = nbformat.read(ch.executed, as_version=4)
             pngs = sum(k.endswith("image/png") for c in nb.cells for o in c.get("outputs", []) for k in o.get("data", {}))
             assert text.count("<img") >= pngs, ch.stem
@@ -603,3 +604,18 @@ def test_the_build_loop_waits_only_on_what_is_not_done():
     assert _to_await({chapter: None}, waiting) == {chapter, busy}
     busy.set_result([])
     assert _to_await({}, waiting) == set()
+
+
+def test_a_page_built_with_a_small_preset_says_so_under_its_title_and_the_studys_does_not() -> None:
+    import nbformat
+
+    from study.book import nbtidy
+
+    def page():
+        nb = nbformat.v4.new_notebook()
+        nb.cells = [nbformat.v4.new_markdown_cell("# Table 1\n\nThe answer."), nbformat.v4.new_code_cell("1")]
+        return nb
+
+    smoke = nbtidy.preset_warning(page(), "smoke").cells[0].source
+    assert smoke.startswith("# Table 1\n\n```{warning}") and "**smoke** preset" in smoke and smoke.endswith("The answer.")
+    assert nbtidy.preset_warning(page(), "paper").cells[0].source == "# Table 1\n\nThe answer."

@@ -274,3 +274,8 @@ def test_classify_reports_the_missing_video_and_the_missing_size_before_the_mode
     assert "not given for the colour 'orange'" in line and "tennis ball's 0.067 m is assumed only" in line
     assert cli.main(["classify", "--manifest", str(tmp_path / "nodir" / "MANIFEST.csv"), *empty]) == 2
     assert "--manifest " in (line := one_error_line(capsys)) and "nodir/MANIFEST.csv: no such file" in line
+
+
+def test_the_commands_help_names_the_video_path():
+    text = " ".join(cli.build_parser().format_help().split())
+    assert "study track VIDEO" in text and "study classify VIDEO --color C --object-size D" in text

@@ -540,7 +540,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="study",
         description=(
             "The motion-pattern study (arXiv:1609.00361, rebuilt with MuJoCo, PyTorch and OpenCV): "
-            "simulate trajectories, build the book. Run 'study COMMAND --help' for each command."
+            "simulate trajectories, train and evaluate, build the book -- and your own video: 'study track VIDEO' "
+            "follows a coloured object through it, 'study classify VIDEO --color C --object-size D' says light or "
+            "heavy. Run 'study COMMAND --help' for each command."
         ),
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=_Parser)

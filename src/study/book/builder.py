@@ -364,7 +364,8 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
             f"('<Figure size ...>'), not as an image: the kernel's matplotlib backend is not the inline one; "
             f"the partial copy is in {ch.failed.relative_to(root)}"
         )
-    nbformat.write(nbtidy.drop_banners(nbtidy.show_parameters_once(executed, parameters)), running)
+    tidy = nbtidy.drop_banners(nbtidy.show_parameters_once(executed, parameters))
+    nbformat.write(nbtidy.preset_warning(tidy, str(parameters.get("preset", nbtidy.STUDY_PRESET))), running)
     ch.executed.parent.mkdir(parents=True, exist_ok=True)
     os.replace(running, ch.executed)  # same filesystem: the complete copy appears in one step
     ch.failed.unlink(missing_ok=True)

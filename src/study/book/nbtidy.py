@@ -7,6 +7,9 @@
 - **Figures are images.** A figure shown by a kernel whose matplotlib backend is not the inline one
   comes out as its text, ``<Figure size 640x480 with 1 Axes>``, and the book would print that text
   where the figure belongs. :func:`figures_as_text` finds such outputs so the build can fail on them.
+- **A small build says so.** A chapter executed with any preset but ``paper`` carries, under its title, a warning
+  that its numbers are that preset's, not the study's (:func:`preset_warning`): a smoke build's verdicts are a
+  test's, and a reader who opens its pages must not take them for the study's.
 - **No library banners.** pybullet's C code prints ``pybullet build time: ...`` when a kernel first imports it,
   past Python's redirection in a Jupyter kernel; :func:`drop_banners` removes those lines from the cells'
   printed output, so a page that only reads Bullet's results does not show them.
@@ -63,6 +66,30 @@ def figures_as_text(nb: Any) -> list[int]:
                 bad.append(i)
                 break
     return bad
+
+
+STUDY_PRESET = "paper"
+"""The preset whose numbers are the study's."""
+PRESET_WARNING = """```{{warning}}
+This page was built with the **{preset}** preset, a small run for tests: its numbers and verdicts are that run's,
+not the study's. `make book` builds the study (preset `paper`).
+```"""
+"""What a page built with another preset says under its title."""
+
+
+def preset_warning(nb: Any, preset: str) -> Any:
+    """``nb`` with :data:`PRESET_WARNING` under the title of its first Markdown cell, unless ``preset`` is the
+    study's own (in place)."""
+    if preset == STUDY_PRESET:
+        return nb
+    for cell in nb.cells:
+        if cell.cell_type != "markdown":
+            continue
+        lines = cell.source.split("\n")
+        at = next((k for k, line in enumerate(lines) if line.startswith("# ")), -1)
+        cell.source = "\n".join([*lines[: at + 1], "", PRESET_WARNING.format(preset=preset), "", *lines[at + 1 :]])
+        break
+    return nb
 
 
 def drop_banners(nb: Any) -> Any:
