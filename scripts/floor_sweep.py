@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -27,18 +28,11 @@ from study.see import floor, render, track
 from study.see.config import TrackConfig
 from study.see.scale import ObjectShape
 
+sys.path.insert(0, str(Path(__file__).parent))
+from ground_points_sweep import _rms, dlt  # noqa: E402  (the same clicks and the same RMS as the one-plane path)
+
 MARKS = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])
 """The marks around the throw's middle, metres on the floor."""
-
-
-def dlt(world: np.ndarray, pixels: np.ndarray) -> np.ndarray:
-    """(3, 4) the projection matrix that takes ``world`` (n, 3) to ``pixels`` (n, 2), least squares (n >= 6)."""
-    rows = []
-    for (x, y, z), (u, v) in zip(world, pixels):
-        p = [x, y, z, 1.0]
-        rows.append([*p, 0, 0, 0, 0, *(-u * np.array(p))])
-        rows.append([0, 0, 0, 0, *p, *(-v * np.array(p))])
-    return np.linalg.svd(np.asarray(rows))[2][-1].reshape(3, 4)
 
 
 def measure(folder: Path, click_px: float) -> None:
@@ -88,14 +82,6 @@ def measure(folder: Path, click_px: float) -> None:
         print(fam, len(e["mean"]), "|", *cells[0], missing.get(fam, 0), "|", *cells[1])
     print("all", sum(len(e["mean"]) for e in err.values()), "|", *_rms(pooled["floor"]), sum(missing.values()), "|",
           *_rms(pooled["mean"]))
-
-
-def _rms(errors: list[np.ndarray]) -> tuple[str, str]:
-    """(median removed, raw) RMS of several clips' height errors, mm (``camera_cost.rms_mm``)."""
-    if not errors:
-        return "-", "-"
-    raw, centred = camera_cost.rms_mm([e[np.isfinite(e)] for e in errors])
-    return f"{centred:.0f}", f"{raw:.0f}"
 
 
 def main() -> None:

@@ -90,6 +90,8 @@ def main() -> None:
 
 def _rms(errors: list[np.ndarray]) -> tuple[str, str]:
     """(median removed, raw) RMS of several clips' height errors, mm, as printed (``camera_cost.rms_mm``)."""
+    if not errors:
+        return "-", "-"
     raw, centred = camera_cost.rms_mm([e[np.isfinite(e)] for e in errors])
     return f"{centred:.0f}", f"{raw:.0f}"
 

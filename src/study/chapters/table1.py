@@ -580,7 +580,7 @@ def baseline_runs(runner: Runner) -> dict[Dims, Fitted]:
     test, out = runner.dataset.test, {}
     for d in paper.BOTH:
         m = baseline.fit(runner.dataset, d, runner.preset.length)
-        s = learners.Physics(d, runner.preset.length).score(runner, None, {"test": (test.x, test.y)})
+        s = learners.Scores({"test": stats.probabilities([m], test.x)}, {"test": np.asarray(test.y)})
         res = train.metrics(test.y, (s.p_heavy["test"][0] > 0.5).astype(np.int64))
         out[d] = Fitted(d, res["accuracy"], s.correct["test"][0], res["per_class_accuracy"], m.coefficients)
     return out

@@ -40,7 +40,7 @@ import numpy as np
 from study.core.errors import ConfigError, DataError
 from study.see.camera import Camera
 from study.see.geometry import G, GeometryError, phases
-from study.see.ground import DEFAULT_FOVY, camera_from_floor
+from study.see.ground import DEFAULT_FOVY, _on_plane, camera_from_floor
 from study.see.trajectory import Trajectory
 
 MIN_MARKS = 4
@@ -148,16 +148,6 @@ def calibrate(floor: Floor, width: int, height: int) -> Calibration:
     err = cam.project(ground) - floor.pixels
     return Calibration(cam, float(np.sqrt(np.mean(np.sum(err**2, axis=1)))), bool(abs(cam.focal - default_f) < 1e-9),
                        len(floor.points))
-
-
-def _on_plane(camera: Camera, u: np.ndarray, v: np.ndarray, z: float) -> np.ndarray:
-    """(n, 3) where each pixel's ray meets the horizontal plane ``z`` up in front of the camera (NaN where not)."""
-    d = camera.rays(u, v)
-    c = np.asarray(camera.position)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = (z - c[2]) / d[:, 2]
-    s = np.where(s > 0, s, np.nan)
-    return c + s[:, None] * d
 
 
 def _over(camera: Camera, u: np.ndarray, v: np.ndarray, xy: np.ndarray) -> np.ndarray:
