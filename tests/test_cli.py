@@ -209,6 +209,15 @@ def test_classify_without_a_model_uses_the_builds_recommended_one(tmp_path, data
     assert cli.main(["classify", str(csv), "--data-dir", str(moved)]) == 0
     line = capsys.readouterr().out.strip()
     assert "smoke build's recommended model (positions, exact, 2 seeds; 90.0 %" in line, line
+    iv = Interval(0.642, 0.529, 0.75, "test")
+    one = recommended.PathModel("positions, exact", (moved / "models" / "m",), iv, {"mean": iv}, (0.0, 1.0))
+    recommended.save(moved, "smoke", {recommended.ONE_SCALE: one}, measured={"positions-exact": {"mean": iv}})
+    assert cli.main(["classify", str(csv), "--data-dir", str(moved)]) == 0
+    said = capsys.readouterr()
+    assert said.out.startswith(f"{csv}: cannot tell (p(heavy) = "), said.out
+    assert "trust: 64.2 % [52.9, 75.0] right (the camera sweep of the smoke build" in said.out
+    assert "cannot tell for p(heavy) 0.00-1.00" in said.out
+    assert "trained on exact trajectories" in said.err and "64.2 % [52.9, 75.0]" in said.err, said.err
     import shutil
 
     shutil.rmtree(moved / "models")

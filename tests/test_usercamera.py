@@ -40,6 +40,7 @@ def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> u
     if drag_rest is not None:
         drag = {k: drag_rest if k != "exact" else v for k, v in drag.items()}
     return usercamera.CameraSweep(clips, {"velocity, randomised": m, "velocity, exact": m}, "velocity, randomised",
+                                  {"velocity, randomised": "velocity-randomised", "velocity, exact": "velocity-exact"},
                                   floors, drag, 0.075, (600.0, 330.0, len(clips)))
 
 
@@ -54,7 +55,8 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     names = [name for name, _ in n.entries()]
     assert {"usercamera.sweep.all.clips", "usercamera.sweep.low.rest.accuracy", "usercamera.sweep.high.rest.cost",
             "usercamera.sweep.all.exact.heights_mm", "usercamera.sweep.all.floor_mm", "usercamera.sweep.drag.rest",
-            "usercamera.sweep.size_error", "usercamera.sweep.render_cpu_s"} <= set(names)
+            "usercamera.sweep.size_error", "usercamera.sweep.render_cpu_s", "usercamera.sweep.kind.velocity-exact.mean",
+            "usercamera.sweep.kind.velocity-randomised.exact"} <= set(names)
     assert "usercamera.sweep.all.exact.cost" not in names, "the exact path has no cost"
     assert n.sweep.groups["low"].clips.value == 10 and n.sweep.groups["all"].clips.value == 20
     f = tmp_path / "results.json"
@@ -79,3 +81,25 @@ def test_the_families_are_described_from_their_records():
     words = _result(_sweep()).families_words
     for f in usercamera.CAMERA_FAMILIES:
         assert f"*{f.key}*" in words and f"{f.height[0]:g}–{f.height[1]:g} m up" in words
+
+
+def test_the_shipped_copy_is_written_from_a_paper_builds_sweep_and_refused_from_another(tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    import pytest
+
+    from study.runs import recommended
+
+    spec = importlib.util.spec_from_file_location("shipped_measured", Path(__file__).parents[1] / "scripts" / "shipped_measured.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    n = usercamera.Numbers(usercamera._sweep_numbers(_sweep()))
+    (tmp_path / "paper.json").write_text(results.dumps(n.entries(), preset="paper"))
+    got = script.shipped(tmp_path / "paper.json", "abc1234")
+    assert got.clips == 20 and set(got.measured) == {"velocity-randomised", "velocity-exact"}
+    assert set(got.measured["velocity-exact"]) == {"exact", *(p for p in ("rest", "mean", "gravity", "geometry"))}
+    assert recommended.read_shipped(recommended.write_shipped(tmp_path / "m.json", got)) == got
+    (tmp_path / "smoke.json").write_text(results.dumps(n.entries(), preset="smoke"))
+    with pytest.raises(SystemExit, match="'smoke' build"):
+        script.shipped(tmp_path / "smoke.json", "abc1234")

@@ -3,27 +3,30 @@
 The video is tracked (``study.see.track``), its pixels turned into heights by one scale read off the object
 (``study.see.scale``: its mean apparent size by default), cut to the model's input, and classified by a trained Z
 model: one given, or the one the last book build in the data folder recommends (``study.runs.recommended``).
-The :class:`Answer` says what it assumed, so a wrong scale is never silent.
+The :class:`Answer` says what it assumed, so a wrong scale is never silent, and how far to trust it
+(``study.trust``: what the study measured for such a model through that path on clips from cameras nobody
+measured; "cannot tell" where the recommended model's probability falls inside its cannot-tell band).
 """
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from study import CLASSES
 from study.core.errors import ConfigError, ModelError, check_file
 from study.learn.trained import Ensemble, TrainedModel
 from study.learn.trained import load as load_model
 from study.report.text import Table
+from study.runs import recommended
 from study.see import track
-from study.runs.stats import label_of
 from study.see.config import TrackConfig
 from study.see.floor import Floor, on_floor, read_floor
-from study.see.scale import DEFAULT, ObjectShape, read_scale
+from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
+from study.trust import CANNOT_TELL, Trust, exact_warning, for_answer, path_of
 
 TENNIS_BALL = ObjectShape("sphere", (0.067,))
 """A tennis ball, 6.7 cm across."""
@@ -68,9 +71,10 @@ class Answer:
     source: str
     """The video or CSV classified."""
     label: str
-    """``"light"`` (bounces: safe to pass) or ``"heavy"`` (slides: must avoid), one of ``study.CLASSES``."""
+    """``"light"`` (bounces: safe to pass), ``"heavy"`` (slides: must avoid), or ``"cannot tell"``
+    (``study.trust.CANNOT_TELL``: p(heavy) inside the model's cannot-tell band)."""
     p: float
-    """The probability the model gives ``label``, 0.5-1."""
+    """The probability the model gives the likelier class, 0.5-1."""
     p_heavy: float
     """The probability of ``"heavy"``, 0-1."""
     model: str
@@ -80,10 +84,15 @@ class Answer:
     trajectory: Trajectory
     """The track, in metres, as classified."""
     warnings: tuple[str, ...] = ()
-    """What makes the answer doubtful: each seed of the model that failed to train (its answers near chance)."""
+    """What makes the answer doubtful: each seed of the model that failed to train (its answers near chance), a
+    model trained on exact trajectories."""
+    trust: Trust | None = None
+    """How far to trust it: the accuracy the study measured for such a model through this path, and the band."""
 
     def __str__(self) -> str:
-        return f"{self.source}: {self.label} (p = {self.p:.3f}; {self.model})\n  assumed: {self.assumed}"
+        trust = "" if self.trust is None else f"\n  trust: {self.trust}"
+        return (f"{self.source}: {self.label} (p(heavy) = {self.p_heavy:.3f}; {self.model}){trust}\n"
+                f"  assumed: {self.assumed}")
 
 
 def shape(size: float | tuple[float, ...] = 0.067, kind: str = "ball") -> ObjectShape:
@@ -93,17 +102,33 @@ def shape(size: float | tuple[float, ...] = 0.067, kind: str = "ball") -> Object
     return ObjectShape("sphere" if kind == "ball" else kind, sizes)
 
 
-def _model(model: str | Path | TrainedModel | Ensemble | None,
-           data_dir: str | Path | None) -> tuple[TrainedModel | Ensemble, str]:
-    if isinstance(model, (TrainedModel, Ensemble)):
-        return model, "the model given"
-    if model is not None:
-        return load_model(model), f"model {model}"
-    from study.core import datadir
-    from study.runs import recommended
+@dataclass(frozen=True)
+class _Model:
+    """The model that answers, what to call it, and the data folder's recommended-model file (None: none read)."""
 
-    ensemble, rec = recommended.load(datadir.resolve(data_dir))
-    return ensemble, rec.describe()
+    model: TrainedModel | Ensemble
+    which: str
+    rec: recommended.Recommended | None
+    recommended: bool
+    """Whether it is that file's model (its band applies)."""
+
+    @property
+    def kind(self) -> str:
+        m = self.model.members[0] if isinstance(self.model, Ensemble) else self.model
+        return recommended.kind(m.config)
+
+
+def _model(model: str | Path | TrainedModel | Ensemble | None, data_dir: str | Path | None) -> _Model:
+    from study.core import datadir
+
+    if model is None:
+        ensemble, rec = recommended.load(datadir.resolve(data_dir))
+        return _Model(ensemble, rec.describe(), rec, True)
+    m = model if isinstance(model, (TrainedModel, Ensemble)) else load_model(model)
+    rec = None
+    with contextlib.suppress(ModelError):  # only for what its build measured of models of this kind
+        rec = recommended.read(datadir.resolve(data_dir))
+    return _Model(m, "the model given" if m is model else f"model {model}", rec, False)
 
 
 def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | None = None, *,
@@ -132,8 +157,8 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
     shape_ = None if metres_per_pixel is not None and isinstance(object_shape, _ByColour) else \
         object_for(object_shape, track_config)  # before the model: the input's problems first
     marks = read_floor(floor) if isinstance(floor, (str, Path)) else floor
-    m, which = _model(model, data_dir)
-    return _answer(source, m, which, track_config, shape_, scale_from, metres_per_pixel, rest_height, marks)
+    return _answer(source, _model(model, data_dir), track_config, shape_, scale_from, metres_per_pixel, rest_height,
+                   marks)
 
 
 def in_metres(traj: Trajectory, object_shape: ObjectShape | None, scale_from: str = DEFAULT,
@@ -154,10 +179,11 @@ def in_metres(traj: Trajectory, object_shape: ObjectShape | None, scale_from: st
     return track.set_scale(traj, ground_v=traj.ground_v, metres_per_pixel=read.metres_per_pixel), read.note()
 
 
-def _answer(source: str | Path, m: TrainedModel | Ensemble, which: str, track_config: TrackConfig | None,
-            object_shape: ObjectShape | None, scale_from: str, metres_per_pixel: float | None,
-            rest_height: float | None, floor: Floor | None = None) -> Answer:
-    """:func:`classify` with the model loaded (``which`` names it)."""
+def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, object_shape: ObjectShape | None,
+            scale_from: str, metres_per_pixel: float | None, rest_height: float | None,
+            floor: Floor | None = None) -> Answer:
+    """:func:`classify` with the model loaded."""
+    m, which = got.model, got.which
     if m.dims != "z":
         raise ModelError(f"{which} was trained on {m.dims!r}; one camera gives only the height: use a model trained "
                          "on 'z' (the paper's real-world test does)")
@@ -174,17 +200,21 @@ def _answer(source: str | Path, m: TrainedModel | Ensemble, which: str, track_co
         how = (f"{scale}; the ground at the lowest centre (row {traj.ground_v:.0f}), one scale for the whole video "
                f"(the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m up at rest")
     x = track.to_model_input(traj, m.fps, m.n_frames, rest_height=rest)
-    p = m.predict_proba(x[None])[0]
-    k = label_of(float(p[1]))
+    p_heavy = float(m.predict_proba(x[None])[0, 1])
+    path = path_of(floor is not None, scale_from, metres_per_pixel)
+    band = got.rec.path().band if got.recommended and got.rec is not None and path in SCALE_FROM else None
+    trust = for_answer(got.kind, path, got.rec, band)
     piece = traj.longest()
     members = m.members if isinstance(m, Ensemble) else (m,)
     assumed = (f"{how}; read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames "
                f"found, {len(traj.segments())} piece(s)")
     warnings = tuple(f"{which}: {mm.failure()}; its answers are near chance" for mm in members if mm.failed)
-    return Answer(str(source), CLASSES[k], float(p[k]), float(p[1]), which, assumed, traj, warnings)
+    exact = exact_warning(got.kind, which, got.rec)
+    return Answer(str(source), trust.label(p_heavy), max(p_heavy, 1.0 - p_heavy), p_heavy, which, assumed, traj,
+                  warnings + ((exact,) if exact else ()), trust)
 
 
-CSV_COLUMNS = ["file", "true", "label", "p", "p_heavy", "correct", "assumed", "error"]
+CSV_COLUMNS = ["file", "true", "label", "p", "p_heavy", "correct", "trust", "assumed", "error"]
 """The columns of ``study classify --manifest --out``'s CSV (:meth:`FolderAnswer.row`)."""
 
 
@@ -203,16 +233,18 @@ class FolderAnswer:
 
     @property
     def correct(self) -> bool | None:
-        """Whether the answer is the manifest's class (None: no class given, or no answer)."""
-        return None if self.true is None or self.answer is None else self.answer.label == self.true
+        """Whether the answer is the manifest's class (None: no class given, no answer, or "cannot tell")."""
+        if self.true is None or self.answer is None or self.answer.label == CANNOT_TELL:
+            return None
+        return self.answer.label == self.true
 
     def row(self) -> dict[str, object]:
-        """The CSV row: file, true, label, p, p_heavy, correct, assumed, error."""
+        """The CSV row: file, true, label, p, p_heavy, correct, trust, assumed, error."""
         a = self.answer
         return {"file": self.file, "true": self.true or "", "label": a.label if a else "",
                 "p": f"{a.p:.4f}" if a else "", "p_heavy": f"{a.p_heavy:.4f}" if a else "",
                 "correct": "" if self.correct is None else str(self.correct).lower(),
-                "assumed": a.assumed if a else "", "error": self.error}
+                "trust": str(a.trust) if a and a.trust else "", "assumed": a.assumed if a else "", "error": self.error}
 
 
 def manifest_folder(manifest: str | Path, what: str = "manifest") -> Path:
@@ -250,11 +282,11 @@ def classify_manifest(manifest: str | Path, model: str | Path | TrainedModel | E
     from study.methods.videos import read_manifest
 
     videos = read_manifest(manifest_folder(manifest, what), color=color, object_size=object_size)  # before the model
-    m, which = _model(model, data_dir)
+    got = _model(model, data_dir)
     out = []
     for v in videos:
         try:
-            ans = _answer(v.path, m, which, v.track_config(), v.object_shape(), scale_from, None, v.rest_height)
+            ans = _answer(v.path, got, v.track_config(), v.object_shape(), scale_from, None, v.rest_height)
             out.append(FolderAnswer(v.path.name, v.label, ans))
         except StudyError as e:
             out.append(FolderAnswer(v.path.name, v.label, None, str(e)))

@@ -406,13 +406,19 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
         help="say whether a tracked object is light (bouncy) or heavy (sliding)",
         description=(
             "Say whether a thrown object is light (bounces: safe to pass) or heavy (slides: must avoid) "
-            "from a video of it, with no camera calibration: the object's colour and size are enough. "
+            "from a video of it, with no camera calibration: the object's colour and size are enough to answer, "
+            "though not to answer well: one scale per clip leaves the heights far off, and each answer quotes the "
+            "accuracy the study measured for its path. "
             "VIDEO_OR_CSV is a video (tracked as 'study track' does, its heights in metres from the object's "
             "mean apparent size) or a trajectory CSV from 'study track --out'; --manifest FILE does every "
             "video of a folder. The model: --model DIR (from 'study train'), else the one the last book "
             "build in the data folder recommends. The longest piece of the track is resampled to the "
-            "model's frame rate and cut or zero-padded to its input length. Prints the class, its "
-            "probability, and what it assumed (the scale, the ground, the frames read)."
+            "model's frame rate and cut or zero-padded to its input length. Prints the class and p(heavy); how "
+            "far to trust it (the accuracy the study's camera sweep measured for such a model through this path, "
+            "with its 95 % interval, from the data folder's build or the copy shipped with the package); "
+            "'cannot tell' where p(heavy) falls inside the recommended model's cannot-tell band (certified on "
+            "throws no training saw; counted neither right nor wrong); and what it assumed (the scale, the "
+            "ground, the frames read)."
         ),
     )
     p.add_argument("input", type=Path, metavar="VIDEO_OR_CSV", nargs="?",
@@ -423,7 +429,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                    "them use --color and --object-size); prints one line a video and how many were right")
     p.add_argument("--out", type=Path, default=None, metavar="CSV",
                    help="with --manifest: write each video's answer here too (file, true, label, p, p_heavy, "
-                   "correct, assumed, error)")
+                   "correct, trust, assumed, error)")
     p.add_argument("--model", type=Path, default=None,
                    help="trained model directory (default: the model the last book build in the data folder "
                    "recommends for a camera, its seeds' mean)")
@@ -470,13 +476,18 @@ def _classify_manifest(a: argparse.Namespace) -> int:
     for w in next((r.answer.warnings for r in rows if r.answer), ()):  # one model answered them all
         _warn(w)
     for r in rows:
-        got = (f"{r.answer.label} (p = {r.answer.p:.3f})" if r.answer else f"not classified: {r.error}")
+        got = (f"{r.answer.label} (p(heavy) = {r.answer.p_heavy:.3f})" if r.answer else f"not classified: {r.error}")
         mark = {True: "  right", False: "  wrong", None: ""}[r.correct]
         print(f"{r.file}: {got}" + (f"; true {r.true}{mark}" if r.true else ""))
     known = [r.correct for r in rows if r.correct is not None]
+    unsure = sum(r.answer is not None and r.answer.label == answer.CANNOT_TELL for r in rows)
+    first = next((r.answer for r in rows if r.answer), None)
     print(f"{len(rows)} videos, {sum(r.answer is not None for r in rows)} classified"
           + (f", {sum(known)} of {len(known)} labelled ones right" if known else "")
-          + (f"; model: {rows[0].answer.model}" if rows and rows[0].answer else ""))
+          + (f", {unsure} cannot tell (counted neither right nor wrong)" if unsure else "")
+          + (f"; answered by {first.model}" if first else ""))
+    if first is not None and first.trust is not None:
+        print(f"trust: {first.trust}")
     if a.out is not None:
         print(f"answers written to {answer.write_answers(rows, a.out)}")
     return 0

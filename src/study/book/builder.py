@@ -515,7 +515,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
             _run_planned(root, preset, chs, last, todo, timings, stages, done, Path(tmp), scheduler, device, workers,
                          cache_dir(root, data_dir))
         if {ch.stem for ch, *_ in done} & RECOMMENDING:
-            steps["recommended model"] = _recommend(preset, cache_dir(root, data_dir), device)
+            steps["recommended model"] = _recommend(preset, cache_dir(root, data_dir), device, _sweep_measured(root))
     finally:
         # Keys last, once every chapter of this run has written what it writes: a chapter whose
         # input folder a later chapter adds to is not re-executed next time for that reason alone.
@@ -536,15 +536,24 @@ RECOMMENDING = {"realworld", "usercamera"}
 """The chapters whose runs the recommended model is chosen from: once one of them has executed, the build saves it."""
 
 
-def _recommend(preset: str, data: Path, device: str) -> float:
+def _sweep_measured(root: Path) -> dict[str, dict[str, Any]]:
+    """What the camera sweep's chapter measured in its last run for each kind of model through each path (its
+    results part; empty if it never ran)."""
+    from study.report.usercamera import measured
+
+    part = next(ch.results_part for ch in chapters(root) if ch.stem == "usercamera")
+    return measured(results.load(part)) if part.is_file() else {}
+
+
+def _recommend(preset: str, data: Path, device: str, measured: dict[str, dict[str, Any]]) -> float:
     """The builder's step after the chapters: the model ``study classify`` uses without ``--model``, chosen from the
-    runs the chapters trained and saved in ``data`` (``study.methods.recommend.make``: keyed, so an unchanged build
-    rewrites nothing). Returns its seconds."""
+    runs the chapters trained, with what the camera sweep ``measured``, saved in ``data``
+    (``study.methods.recommend.make``: keyed, so an unchanged build rewrites nothing). Returns its seconds."""
     from study.methods import recommend
     from study.runs import Runner
 
     t0 = time.perf_counter()
-    path = recommend.make(Runner.open(preset, 0, data, device=device))
+    path = recommend.make(Runner.open(preset, 0, data, device=device), measured)
     tqdm.write(f"recommended model: {path}", file=sys.stderr)
     return round(time.perf_counter() - t0, 3)
 

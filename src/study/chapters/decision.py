@@ -33,7 +33,7 @@ import numpy as np
 from study.core.errors import ConfigError
 from study.learn.config import Inputs, TrainConfig
 from study.learn.metrics import Interval, bootstrap_accuracy
-from study.methods import calibration, camera, learners, operating
+from study.methods import calibration, camera, certify, learners, operating
 from study.report.decision import (
     CertifiedNumbers,
     Choice,
@@ -47,7 +47,6 @@ from study.report.decision import (
 from study.report.reported import count, number
 from study.report.text import Table, fmt, pct, pct_ci
 from study.runs import stats
-from study.simulate import synth
 
 if TYPE_CHECKING:  # a type only: the chapter passes a runner in
     from study.runs.runner import Runner
@@ -59,8 +58,6 @@ if TYPE_CHECKING:  # a type only: the chapter passes a runner in
 
 TARGET_MISS = 0.01
 """The chapter's target: at most this share of heavy objects may be called light."""
-CERTIFY_SEED = 500
-"""The certification split is simulated from the data set's seed plus this (throws no other split holds)."""
 OBSERVE_SEEDS: dict[str, int] = {"test": 11, "certify": 12}
 """Seeds of the chapter's own observed draws of the test and the certification split."""
 
@@ -96,24 +93,16 @@ class Splits:
         return np.arange(self.n_frames) / self.fps
 
 
-def certification_config(runner: Runner) -> synth.SynthConfig:
-    """The certification split's synthesis: the study's priors and scene, ``preset.certify_per_class`` throws of
-    each class (its test split; a training split of one), as long as Table 1's input and two frames more."""
-    T = runner.table1_config().n_frames(runner.fps)
-    return runner.synth_config.replace(duration=(T + 2) / runner.fps, n_train=1, n_test=runner.preset.certify_per_class)
-
-
 def splits(runner: Runner) -> Splits:
-    """The certification split (simulated once, from seed :data:`CERTIFY_SEED` above the data set's; throws that
-    neither training, early stopping nor the grid search has seen) beside the data set's test split, both also
+    """The certification split (``study.methods.certify``: throws that neither training, early stopping nor the
+    grid search has seen) beside the data set's test split, both also
     observed with the tracker's error (``calibration.observation``; seeds :data:`OBSERVE_SEEDS`)."""
     T = runner.table1_config().n_frames(runner.fps)
-    seed = int(runner.dataset.meta["seed"]) + CERTIFY_SEED
-    certify = synth.dataset(certification_config(runner), seed, data_dir=runner.data_dir, progress=False).test
+    cx, cy = certify.split(runner)
     test, ob = runner.dataset.test, calibration.observation(runner)
-    return Splits(T, runner.fps, test.x, np.asarray(test.y), certify.x, np.asarray(certify.y),
+    return Splits(T, runner.fps, test.x, np.asarray(test.y), cx, cy,
                   ob.observe(test.x[:, :T], runner.fps, seed=OBSERVE_SEEDS["test"]),
-                  ob.observe(certify.x[:, :T], runner.fps, seed=OBSERVE_SEEDS["certify"]))
+                  ob.observe(cx[:, :T], runner.fps, seed=OBSERVE_SEEDS["certify"]))
 
 
 @dataclass(frozen=True)

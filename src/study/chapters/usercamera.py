@@ -25,6 +25,7 @@ from study.methods.recommend import Recommendation, recommend
 from study.report.reported import count, number
 from study.report.text import Table, pct, pct_ci, points
 from study.report.usercamera import Numbers, PathKey, Sweep, SweepGroup, SweepPath
+from study.runs import recommended
 from study.see import paths
 from study.simulate import measure
 from study.simulate.observe import CAMERA_FAMILIES
@@ -50,6 +51,8 @@ class CameraSweep:
     """Candidate name -> its seeds on every path (the recommended one among them)."""
     choice: str
     """The recommended candidate's name."""
+    kinds: dict[str, str]
+    """Candidate name -> its kind (``study.runs.recommended.kind``)."""
     floors: dict[str, camera_cost.Floor]
     """Group -> the one-scale floor (true and tracked image rows)."""
     drag: dict[str, Interval]
@@ -95,7 +98,8 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
     drag = camera_cost.drag_rule(f_train, ds.train.y, clips, read(first)[0], fps, contact)
     times = sweep.render_times(clips)
     cpu, wall = (sum(t[k] for t in times.values()) for k in ("cpu_s", "wall_s"))
-    return CameraSweep(tuple(clips), measured, rec.choice, camera_cost.floors(clips, tracked), drag,
+    kinds = {name: recommended.kind(rec.configs[name]) for name in rec.models}
+    return CameraSweep(tuple(clips), measured, rec.choice, kinds, camera_cost.floors(clips, tracked), drag,
                        camera_cost.size_error(clips, tracked, shape), (cpu, wall, len(times)))
 
 
@@ -114,9 +118,11 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
                                       f"camera sweep ({g}): least one-scale height error", unit="mm"), by_path)
     drag = {PATH_KEYS[k]: number(iv, f"camera sweep: drag rule's accuracy, heights {k}") for k, iv in cs.drag.items()}
     cpu, _, timed = cs.render_s
+    kinds = {cs.kinds[name]: {PATH_KEYS[k]: number(r.accuracy, f"camera sweep: {name}'s accuracy, heights {k}")
+                              for k, r in m.results["all"].items()} for name, m in cs.measured.items()}
     return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]
                  number(cpu, "camera sweep: CPU seconds to render the clips", unit="s") if timed == len(cs.clips)
-                 else None)
+                 else None, kinds)
 
 
 def _sweep_table(cs: CameraSweep) -> Table:

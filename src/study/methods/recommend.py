@@ -5,8 +5,9 @@ saves it for ``study classify``.
 exact positions, on random observations, or on any camera (``study.simulate.observe.any_camera``);
 :func:`recommended` chooses the one with the highest mean validation accuracy over seeds as a user's camera gives
 the throws. The real-world chapters show the choice (:func:`recommend`); the book's builder runs :func:`make` once
-the chapters' runs are trained, which writes it to the data folder (``study.runs.recommended``), keyed by content so
-that a rebuild that changed nothing writes nothing.
+the chapters' runs are trained, which writes it to the data folder (``study.runs.recommended``) with what the camera
+sweep measured for it and its cannot-tell band (:func:`band`), keyed by content so that a rebuild that changed
+nothing writes nothing.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from study.learn import train
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, hierarchical_bootstrap
 from study.learn.trained import Ensemble
-from study.methods import calibration
+from study.methods import calibration, certify, operating
 from study.runs import recommended as saved
 from study.runs import records
 from study.runs.stats import correct_of
@@ -34,6 +35,12 @@ from study.simulate import observe
 
 if TYPE_CHECKING:
     from study.runs.runner import Runner
+
+BAND_TARGET = 0.05
+"""Each side of a recommended model's cannot-tell band: an answer of light may let through at most this share of
+heavy objects, an answer of heavy at most this share of light ones, each certified at 95 %."""
+CERTIFY_OBSERVE_SEED = 13
+"""Seed of the certification split's cameras as a user's path sees them (the decision chapter's draws are 11, 12)."""
 
 
 @dataclass(frozen=True)
@@ -118,26 +125,55 @@ def recommend(runner: Runner) -> Recommendation:
     return recommended(runner, cands, seeds)
 
 
-def step_key(runner: Runner) -> str:
+def band(p_heavy: np.ndarray, y: np.ndarray, target: float = BAND_TARGET) -> tuple[float, float] | None:
+    """The cannot-tell band of p(heavy), from a model's ``p_heavy`` (n,) on the certification split (labels ``y``,
+    1 = heavy) as a path sees it: below its low side an answer of light lets through at most ``target`` of the heavy
+    objects, above its high side an answer of heavy at most ``target`` of the light ones, each side
+    ``operating.certified_threshold`` at 95 %. ``(0, 1)`` when the split is too small to certify a side (no answer
+    can be stood behind); None when the sides cross (every answer is certified, and the label is the likelier
+    class)."""
+    p, y = np.asarray(p_heavy, dtype=np.float64), np.asarray(y)
+    low = operating.certified_threshold(p, y, target)
+    light_side = operating.certified_threshold(1.0 - p, 1 - y, target)
+    if low is None or light_side is None:
+        return (0.0, 1.0)
+    high = 1.0 - light_side
+    return None if low > high else (low, high)
+
+
+def certified_band(runner: Runner, model: Ensemble, n_frames: int) -> tuple[float, float] | None:
+    """:func:`band` of ``model`` on the certification split (``study.methods.certify``) as a user's camera and one
+    scale give it (``observe.any_camera``), its first ``n_frames`` frames."""
+    x, y = certify.split(runner)
+    seen = observe.any_camera(x[:, :n_frames], runner.fps, np.random.default_rng(CERTIFY_OBSERVE_SEED))
+    return band(model.predict_proba(seen.astype(np.float32))[:, 1], y)
+
+
+def step_key(runner: Runner, measured: saved.Measured | None = None) -> str:
     """The content key of :func:`make` on ``runner``: every candidate run's key (its data, config and the training
-    code) and this module's code. The same key, the same saved model."""
+    code), the sweep's numbers and this module's code. The same key, the same saved model."""
     cands, seeds = candidates(runner), runner.preset.grid_seeds
     runs = sorted(records.run_key(runner.dataset, dataclasses.replace(c, dims="z", seed=s), False, runner.device)
                   for c in cands.values() for s in seeds)
-    return cache.key({"runs": runs, "code": cache.code_hash("recommended"), "preset": runner.preset.name})
+    sweep = {k: {p: dataclasses.astuple(iv) for p, iv in by.items()} for k, by in (measured or {}).items()}
+    return cache.key({"runs": runs, "code": cache.code_hash("recommended"), "preset": runner.preset.name,
+                      "sweep": sweep})
 
 
-def make(runner: Runner) -> Path:
+def make(runner: Runner, measured: saved.Measured | None = None) -> Path:
     """The builder's step: :func:`recommend` saved in the data folder as the model ``study classify`` uses without
-    ``--model`` (``study.runs.recommended``), for the one-scale path; skipped when the file there has this very
-    :func:`step_key`. Returns the file."""
-    key = step_key(runner)
+    ``--model`` (``study.runs.recommended``), for the one-scale path, with its cannot-tell band
+    (:func:`certified_band`) and what the camera sweep ``measured`` for it and for every
+    kind of model; skipped when the file there has this very :func:`step_key`. Returns the file."""
+    key = step_key(runner, measured)
     with contextlib.suppress(ModelError):
         if saved.read(runner.data_dir).key == key:
             return Path(runner.data_dir) / saved.FILE
     rec = recommend(runner)
-    seeds = runner.preset.grid_seeds
-    dirs = tuple(records.model_dir(runner.dataset, dataclasses.replace(rec.configs[rec.choice], dims="z", seed=s),
+    seeds, cfg = runner.preset.grid_seeds, rec.configs[rec.choice]
+    dirs = tuple(records.model_dir(runner.dataset, dataclasses.replace(cfg, dims="z", seed=s),
                                    runner.data_dir, runner.device) for s in seeds)
-    one = saved.PathModel(rec.choice, dirs, rec.val_user[rec.choice])
-    return saved.save(runner.data_dir, runner.preset.name, {saved.ONE_SCALE: one}, key)
+    accuracy = dict((measured or {}).get(saved.kind(cfg), {}))
+    one = saved.PathModel(rec.choice, dirs, rec.val_user[rec.choice], accuracy,
+                          certified_band(runner, rec.model, cfg.n_frames(runner.fps)))
+    return saved.save(runner.data_dir, runner.preset.name, {saved.ONE_SCALE: one}, key, measured or {})

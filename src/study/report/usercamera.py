@@ -5,9 +5,11 @@ them)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from collections.abc import Mapping
 from typing import Literal
 
-from study.report.reported import Number, Reported, named
+from study.learn.metrics import Interval
+from study.report.reported import Leaf, Number, Reported, named
 from study.see.paths import PathKey  # the paths are defined once, there
 from study.simulate.observe import CAMERA_FAMILIES
 
@@ -52,6 +54,9 @@ class Sweep(Reported):
     """Median relative error of one frame's blob diameter against the object's true apparent size."""
     render_cpu_s: Number | None = None
     """CPU seconds the clips took to render, as recorded when they were made (None: not recorded)."""
+    kinds: dict[str, dict[PathKey, Number]] = named("kind", default_factory=dict)
+    """Every candidate, by its kind (``study.runs.recommended.kind``): its accuracy on all clips, exact heights and
+    by each path (what an answer quotes for a model of that kind)."""
 
 
 @dataclass(frozen=True)
@@ -61,3 +66,13 @@ class Numbers(Reported):
     CHAPTER = "usercamera"
     sweep: Sweep
     """The camera sweep."""
+
+
+def measured(leaves: Mapping[str, Leaf]) -> dict[str, dict[str, Interval]]:
+    """What the camera sweep measured for each kind of model through each path (``usercamera.sweep.kind.*`` of a
+    results file's ``leaves``), as intervals: what the recommended model's file and the package's shipped copy keep
+    (``study.runs.recommended.Measured``). Empty when the sweep is not among the leaves."""
+    if not any(k.startswith("usercamera.sweep.kind.") for k in leaves):
+        return {}
+    kinds = Sweep.read(leaves, "usercamera.sweep").kinds
+    return {k: {p: Interval(n.value, n.lo, n.hi, n.method) for p, n in by.items()} for k, by in kinds.items()}

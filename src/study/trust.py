@@ -1,0 +1,103 @@
+"""How far an answer on a video can be trusted: the accuracy the study measured for the answering model's kind
+through the path its heights came by (the camera sweep: clips from cameras nobody measured), and the band of
+p(heavy) where the study cannot tell the classes apart.
+
+The numbers come from the recommended model's file in the data folder (``study.runs.recommended``: what the book
+build there measured), else from the copy of a paper build's that ships with the package
+(``study.runs.recommended.SHIPPED``). :func:`for_answer` puts them together for one answer; :meth:`Trust.label`
+turns p(heavy) into ``"light"``, ``"heavy"`` or :data:`CANNOT_TELL`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from study import CLASSES
+from study.learn.metrics import Interval
+from study.runs import recommended
+from study.runs.stats import label_of
+from study.see import paths
+
+CANNOT_TELL = "cannot tell"
+"""The answer where p(heavy) falls inside the model's cannot-tell band: neither right nor wrong in a tally."""
+FLOOR = "floor"
+"""The path of heights placed through the camera that floor marks give (``--floor``; not yet on the sweep)."""
+MEASURED_SCALE = "measured scale"
+"""The path of a scale the user measured (``--metres-per-pixel``): the sweep has no such path."""
+
+
+@dataclass(frozen=True)
+class Trust:
+    """How far one answer can be trusted."""
+
+    accuracy: Interval | None
+    """The share of the camera sweep's throws that models of this kind labelled right through this path, with its
+    95 % interval (None: not measured; :attr:`source` says why)."""
+    source: str
+    """Where :attr:`accuracy` comes from, or why there is none."""
+    band: tuple[float, float] | None = None
+    """p(heavy) from ``band[0]`` to ``band[1]``, ends included: the study cannot tell the classes apart there
+    (None: no band, the likelier class is the answer)."""
+
+    def label(self, p_heavy: float) -> str:
+        """``"light"``, ``"heavy"`` (the likelier class), or :data:`CANNOT_TELL` inside :attr:`band`."""
+        if self.band is not None and self.band[0] <= p_heavy <= self.band[1]:
+            return CANNOT_TELL
+        return CLASSES[label_of(p_heavy)]
+
+    def __str__(self) -> str:
+        acc = ("not measured" if self.accuracy is None else
+               f"{100 * self.accuracy.value:.1f} % [{100 * self.accuracy.lo:.1f}, {100 * self.accuracy.hi:.1f}] right")
+        band = ("" if self.band is None else
+                f"; cannot tell for p(heavy) {self.band[0]:.2f}-{self.band[1]:.2f}")
+        return f"{acc} ({self.source}){band}"
+
+
+def path_of(floor: bool, scale_from: str, metres_per_pixel: float | None) -> str:
+    """The path an answer's heights came by: :data:`FLOOR`, :data:`MEASURED_SCALE` or a one-scale path's key."""
+    if floor:
+        return FLOOR
+    return MEASURED_SCALE if metres_per_pixel is not None else scale_from
+
+
+def measurements(rec: recommended.Recommended | None) -> tuple[recommended.Measured, str]:
+    """What the sweep measured and where it comes from: the data folder's build (``rec``) if it measured it, else
+    the shipped copy; empty and why when neither has it."""
+    if rec is not None and rec.measured:
+        return rec.measured, f"the camera sweep of the {rec.preset} build beside the recommended model"
+    shipped = recommended.read_shipped()
+    if shipped is not None:
+        return shipped.measured, f"the camera sweep of {shipped.source()}"
+    return {}, "no build's camera sweep is at hand: build the book to measure it"
+
+
+def for_answer(kind: str, path: str, rec: recommended.Recommended | None = None,
+               band: tuple[float, float] | None = None) -> Trust:
+    """The trust of an answer by a model of ``kind`` (``study.runs.recommended.kind``) whose heights came by
+    ``path`` (:func:`path_of`); ``rec``: the data folder's recommended-model file, if any; ``band``: the answering
+    model's cannot-tell band on this path (the recommended model's; None for any other)."""
+    measured, source = measurements(rec)
+    if path == FLOOR:
+        return Trust(None, "the floor path is experimental: the camera sweep has not measured it yet", band)
+    if path == MEASURED_SCALE:
+        return Trust(None, "a scale you measured: the camera sweep measured one scale read off the object", band)
+    if not measured:
+        return Trust(None, source, band)
+    if kind not in measured:
+        return Trust(None, f"{source} scored no model of this kind ({kind}; it scored {', '.join(measured)})", band)
+    words = paths.BY_KEY[path].words if path in paths.BY_KEY else path
+    return Trust(measured[kind].get(path), f"{source}: models of this kind ({kind}) through the {words} path", band)
+
+
+def exact_warning(kind: str, which: str, rec: recommended.Recommended | None = None) -> str | None:
+    """For a model trained on exact trajectories given a video: a warning saying what the sweep measured for such
+    models through the default path, and what to use instead; None for any other kind."""
+    if not kind.endswith("-exact"):
+        return None
+    measured, source = measurements(rec)
+    got = measured.get(kind, {}).get(paths.DEFAULT)
+    said = ("" if got is None else
+            f"; on {source}, such models labelled {100 * got.value:.1f} % [{100 * got.lo:.1f}, {100 * got.hi:.1f}] "
+            "of the throws right through one scale")
+    return (f"{which} was trained on exact trajectories, not on heights a camera gives{said}. For video, use the "
+            "recommended model (no --model) or train with --observe any-camera")

@@ -1,0 +1,83 @@
+"""How far an answer can be trusted (study.trust) and the recommended model's cannot-tell band
+(study.methods.recommend.band): known answers on tiny inputs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from study import trust
+from study.core.errors import ModelError
+from study.learn.metrics import Interval
+from study.methods import operating, recommend
+from study.runs import recommended
+
+IV = Interval(0.642, 0.529, 0.75, "test")
+
+
+def test_a_band_leaves_each_class_at_most_its_certified_share_of_the_other():
+    rng = np.random.default_rng(0)
+    y = np.repeat([0, 1], 1000)
+    p = np.clip(np.where(y == 1, 0.65, 0.35) + rng.normal(0, 0.15, y.size), 0, 1)  # classes overlap
+    lo, hi = recommend.band(p, y, target=0.05)
+    assert 0 < lo < 0.5 < hi < 1
+    k_max = max(k for k in range(1000) if operating.clopper_pearson_upper(k, 1000) <= 0.05)
+    assert (p[y == 1] < lo).sum() <= k_max, "an answer of light lets through at most the certified heavy ones"
+    assert (p[y == 0] > hi).sum() <= k_max, "an answer of heavy at most the certified light ones"
+    assert (p[y == 1] < lo + 1e-3).sum() > k_max, "and the low side is the highest that does"
+
+
+def test_a_band_is_none_when_the_classes_separate_and_everything_when_too_few_to_certify():
+    y = np.repeat([0, 1], 1000)
+    assert recommend.band(np.where(y == 1, 0.9, 0.1), y, target=0.05) is None
+    assert recommend.band(np.where(y[::100] == 1, 0.9, 0.1), y[::100], target=0.05) == (0.0, 1.0), "20 throws"
+
+
+def test_an_answer_inside_the_band_is_cannot_tell_and_outside_it_the_likelier_class():
+    t = trust.Trust(IV, "test", (0.3, 0.7))
+    assert [t.label(p) for p in (0.29, 0.3, 0.5, 0.7, 0.71)] == ["light", *[trust.CANNOT_TELL] * 3, "heavy"]
+    assert trust.Trust(IV, "test").label(0.51) == "heavy" and trust.Trust(IV, "test").label(0.5) == "light"  # heavy above 1/2
+    said = str(t)
+    assert said.startswith("64.2 % [52.9, 75.0] right (test)") and "cannot tell for p(heavy) 0.30-0.70" in said
+
+
+def _rec(measured):
+    return recommended.Recommended("paper", {}, "k", measured)
+
+
+def test_an_answer_quotes_what_the_sweep_measured_for_its_kind_and_path_or_says_why_not(tmp_path, monkeypatch):
+    rec = _rec({"velocity-any-camera": {"exact": IV, "mean": IV}})
+    got = trust.for_answer("velocity-any-camera", "mean", rec)
+    assert got.accuracy == IV and "paper build" in got.source and "mean silhouette path" in got.source
+    assert trust.for_answer("velocity-any-camera", "gravity", rec).accuracy is None
+    missing = trust.for_answer("positions-fixed", "mean", rec)
+    assert missing.accuracy is None and "no model of this kind (positions-fixed" in missing.source
+    assert "floor path is experimental" in trust.for_answer("velocity-any-camera", trust.FLOOR, rec).source
+    assert "a scale you measured" in trust.for_answer("velocity-any-camera", trust.MEASURED_SCALE, rec).source
+    monkeypatch.setattr(recommended, "SHIPPED", tmp_path / "none.json")
+    alone = trust.for_answer("velocity-any-camera", "mean", None)
+    assert alone.accuracy is None and "build the book" in alone.source
+
+
+def test_the_shipped_copy_reads_back_and_a_broken_one_is_named(tmp_path, monkeypatch):
+    path = tmp_path / "measured.json"
+    shipped = recommended.Shipped("abc1234", "paper", 80, {"velocity-exact": {"mean": IV}}, "velocity-any-camera")
+    assert recommended.read_shipped(recommended.write_shipped(path, shipped)) == shipped
+    monkeypatch.setattr(recommended, "SHIPPED", path)
+    got = trust.for_answer("velocity-exact", "mean")
+    assert got.accuracy == IV and "paper build of abc1234, 80 clips" in got.source
+    warned = trust.exact_warning("velocity-exact", "model m")
+    assert warned is not None and "exact trajectories" in warned and "64.2 % [52.9, 75.0]" in warned
+    assert "--observe any-camera" in warned and trust.exact_warning("velocity-any-camera", "model m") is None
+    path.write_text('{"format": "study.measured/1"}')
+    with pytest.raises(ModelError, match=f"{path} cannot be read"):
+        recommended.read_shipped(path)
+
+
+def test_a_cannot_tell_counts_neither_right_nor_wrong():
+    from study.answer import Answer, FolderAnswer
+
+    a = Answer("v.mp4", trust.CANNOT_TELL, 0.6, 0.6, "m", "", None, (), trust.Trust(IV, "test", (0.3, 0.7)))  # type: ignore[arg-type]
+    row = FolderAnswer("v.mp4", "heavy", a)
+    assert row.correct is None and row.row()["correct"] == "" and "cannot tell for" in row.row()["trust"]
+    assert FolderAnswer("v.mp4", "light", a.__class__(**{**a.__dict__, "label": "heavy"})).correct is False
