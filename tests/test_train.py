@@ -619,3 +619,21 @@ def test_a_saved_model_folder_follows_the_umask(tm, tmp_path):
         assert (out / "weights.pt").stat().st_mode & 0o777 == 0o644
     finally:
         os.umask(old)
+
+
+def test_halving_check_ranks_points_by_the_pick_rule_on_each_histories_prefix():
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location("halving_check", Path(__file__).parents[1] / "scripts" / "halving_check.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+
+    def run(accs):  # validation loss falls whenever accuracy rises
+        return [{"val_accuracy": a, "val_loss": 1.0 - a} for a in accs]
+
+    late = [run([0.6] * 30 + [0.9] * 30)] * 3  # the late starter: behind at 20 epochs, ahead at the end
+    early = [run([0.7] * 60)] * 3
+    points = {(1e-3, 90): late, (1e-3, 30): early}
+    assert script.pick(points, None)[0] == (1e-3, 90)
+    assert script.pick(points, 20)[0] == (1e-3, 30), "a rung at 20 epochs would drop the full grid's pick"
