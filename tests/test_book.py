@@ -418,11 +418,11 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
     again = book.execute(tmp_path, "smoke", only=["table1", "decision"])  # every run they ask for is trained
     assert not json.loads((tmp_path / "_build" / "executed" / "timings.json").read_text())["stages"]
     assert sorted((tmp_path / "data" / "runs").glob("*.json")) == records, "executing after the plan trains no run"
-    from study.runs import recommended
+    from study.runs import measured, recommended
 
     rec = recommended.read(tmp_path / "data")  # the model `study classify` uses without --model
     assert rec.preset == "smoke" and rec.key and all(m.is_dir() for m in rec.path().models)
-    chosen = recommended.kind(recommended.load(tmp_path / "data")[0].members[0].config)
+    chosen = measured.kind(recommended.load(tmp_path / "data")[0].members[0].config)
     assert set(rec.path().accuracy) >= {"exact", "mean"} and rec.path().accuracy == rec.measured[chosen]
     assert rec.path().band == (0.0, 1.0), "8 throws a class certify no side: every answer is 'cannot tell'"
     assert not again["table1"]["cached"] and "waited" not in again["table1"]

@@ -102,8 +102,10 @@ def test_a_failed_model_is_reported_by_train_and_classify(tmp_path, dataset_file
                    + "".join(f"{i},{i / 30:.6f},10,{50 + i},{0.5 - i / 100:.4f},measured,0,1\n" for i in range(20)))
     assert cli.main(["classify", str(csv), "--model", str(out)]) == 0
     captured = capsys.readouterr()
-    assert "study: warning: " in captured.err and "failed to train" in captured.err
-    assert captured.out.startswith(f"{csv}: ")
+    assert "study: warning: " in captured.err and "1 of 1 seed(s) failed to train" in captured.err
+    assert "--lr" not in captured.err and "--epochs" not in captured.err, "classify names what classify accepts"
+    assert "trained on exact trajectories" in captured.err and "--observe any-camera" in captured.err
+    assert captured.out.startswith(f"{csv}: ") and "\n  trust: " in captured.out
 
 
 def test_book_output_folder(tmp_path, capsys):

@@ -10,7 +10,7 @@ from study import trust
 from study.core.errors import ModelError
 from study.learn.metrics import Interval
 from study.methods import operating, recommend
-from study.runs import recommended
+from study.runs import measured, recommended
 
 IV = Interval(0.642, 0.529, 0.75, "test")
 
@@ -54,16 +54,17 @@ def test_an_answer_quotes_what_the_sweep_measured_for_its_kind_and_path_or_says_
     assert missing.accuracy is None and "no model of this kind (positions-fixed" in missing.source
     assert "floor path is experimental" in trust.for_answer("velocity-any-camera", trust.FLOOR, rec).source
     assert "a scale you measured" in trust.for_answer("velocity-any-camera", trust.MEASURED_SCALE, rec).source
-    monkeypatch.setattr(recommended, "SHIPPED", tmp_path / "none.json")
+    monkeypatch.setattr(measured, "SHIPPED", tmp_path / "none.json")
     alone = trust.for_answer("velocity-any-camera", "mean", None)
     assert alone.accuracy is None and "build the book" in alone.source
 
 
 def test_the_shipped_copy_reads_back_and_a_broken_one_is_named(tmp_path, monkeypatch):
     path = tmp_path / "measured.json"
-    shipped = recommended.Shipped("abc1234", "paper", 80, {"velocity-exact": {"mean": IV}}, "velocity-any-camera")
-    assert recommended.read_shipped(recommended.write_shipped(path, shipped)) == shipped
-    monkeypatch.setattr(recommended, "SHIPPED", path)
+    shipped = measured.Shipped("abc1234", "paper", 80, {"velocity-exact": {"mean": IV}, "velocity-fixed": {"mean": IV}})
+    assert shipped.span("mean") == "64.2-64.2 %" and shipped.span("floor") == ""
+    assert measured.read_shipped(measured.write_shipped(path, shipped)) == shipped
+    monkeypatch.setattr(measured, "SHIPPED", path)
     got = trust.for_answer("velocity-exact", "mean")
     assert got.accuracy == IV and "paper build of abc1234, 80 clips" in got.source
     warned = trust.exact_warning("velocity-exact", "model m")
@@ -71,7 +72,7 @@ def test_the_shipped_copy_reads_back_and_a_broken_one_is_named(tmp_path, monkeyp
     assert "--observe any-camera" in warned and trust.exact_warning("velocity-any-camera", "model m") is None
     path.write_text('{"format": "study.measured/1"}')
     with pytest.raises(ModelError, match=f"{path} cannot be read"):
-        recommended.read_shipped(path)
+        measured.read_shipped(path)
 
 
 def test_a_cannot_tell_counts_neither_right_nor_wrong():
@@ -81,3 +82,22 @@ def test_a_cannot_tell_counts_neither_right_nor_wrong():
     row = FolderAnswer("v.mp4", "heavy", a)
     assert row.correct is None and row.row()["correct"] == "" and "cannot tell for" in row.row()["trust"]
     assert FolderAnswer("v.mp4", "light", a.__class__(**{**a.__dict__, "label": "heavy"})).correct is False
+
+
+def test_classify_help_quotes_the_shipped_measurements_or_says_there_are_none(tmp_path, monkeypatch, capsys):
+    from study import cli
+
+    def help_text() -> str:
+        with pytest.raises(SystemExit):
+            cli.main(["classify", "--help"])
+        return " ".join(capsys.readouterr().out.split())
+
+    monkeypatch.setattr(measured, "SHIPPED", tmp_path / "none.json")
+    assert "ships no such measurement" in help_text()
+    low = Interval(0.525, 0.41, 0.64, "test")
+    measured.write_shipped(tmp_path / "m.json", measured.Shipped(
+        "abc1234", "paper", 80, {"velocity-exact": {"mean": low, "exact": IV}, "velocity-any-camera": {"mean": IV}}))
+    monkeypatch.setattr(measured, "SHIPPED", tmp_path / "m.json")
+    said = help_text()
+    assert "On the paper build of abc1234, 80 clips from random cameras" in said
+    assert "labelled 52.5-64.2 % of the throws right through one scale" in said and "--floor) is experimental" in said

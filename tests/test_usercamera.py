@@ -89,7 +89,7 @@ def test_the_shipped_copy_is_written_from_a_paper_builds_sweep_and_refused_from_
 
     import pytest
 
-    from study.runs import recommended
+    from study.runs import measured
 
     spec = importlib.util.spec_from_file_location("shipped_measured", Path(__file__).parents[1] / "scripts" / "shipped_measured.py")
     script = importlib.util.module_from_spec(spec)
@@ -99,7 +99,7 @@ def test_the_shipped_copy_is_written_from_a_paper_builds_sweep_and_refused_from_
     got = script.shipped(tmp_path / "paper.json", "abc1234")
     assert got.clips == 20 and set(got.measured) == {"velocity-randomised", "velocity-exact"}
     assert set(got.measured["velocity-exact"]) == {"exact", *(p for p in ("rest", "mean", "gravity", "geometry"))}
-    assert recommended.read_shipped(recommended.write_shipped(tmp_path / "m.json", got)) == got
+    assert measured.read_shipped(measured.write_shipped(tmp_path / "m.json", got)) == got
     (tmp_path / "smoke.json").write_text(results.dumps(n.entries(), preset="smoke"))
     with pytest.raises(SystemExit, match="'smoke' build"):
         script.shipped(tmp_path / "smoke.json", "abc1234")

@@ -20,7 +20,7 @@ from study.core.errors import ConfigError, ModelError, check_file
 from study.learn.trained import Ensemble, TrainedModel
 from study.learn.trained import load as load_model
 from study.report.text import Table
-from study.runs import recommended
+from study.runs import measured, recommended
 from study.see import track
 from study.see.config import TrackConfig
 from study.see.floor import Floor, on_floor, read_floor
@@ -115,7 +115,7 @@ class _Model:
     @property
     def kind(self) -> str:
         m = self.model.members[0] if isinstance(self.model, Ensemble) else self.model
-        return recommended.kind(m.config)
+        return measured.kind(m.config)
 
 
 def _model(model: str | Path | TrainedModel | Ensemble | None, data_dir: str | Path | None) -> _Model:
@@ -208,7 +208,10 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
     members = m.members if isinstance(m, Ensemble) else (m,)
     assumed = (f"{how}; read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames "
                f"found, {len(traj.segments())} piece(s)")
-    warnings = tuple(f"{which}: {mm.failure()}; its answers are near chance" for mm in members if mm.failed)
+    failed = [mm for mm in members if mm.failed]
+    warnings = (f"{which}: {len(failed)} of {len(members)} seed(s) failed to train (on their validation throws they "
+                "could not be told from a coin), so their answers are near chance: retrain ('study train' with "
+                "another --seed) or pass another --model",) if failed else ()
     exact = exact_warning(got.kind, which, got.rec)
     return Answer(str(source), trust.label(p_heavy), max(p_heavy, 1.0 - p_heavy), p_heavy, which, assumed, traj,
                   warnings + ((exact,) if exact else ()), trust)

@@ -400,6 +400,19 @@ def _add_evaluate(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
+def _measured_words() -> str:
+    """What the shipped copy of a paper build's camera sweep measured, for ``classify --help``."""
+    from study.runs.measured import read_shipped
+    from study.see.paths import DEFAULT
+
+    shipped = read_shipped()
+    if shipped is None:
+        return "This copy of the package ships no such measurement; a book build makes one. "
+    return (f"On {shipped.source()}, the models the study compared labelled {shipped.span(DEFAULT)} of the throws "
+            f"right through one scale and {shipped.span('exact')} from their exact heights; the floor path "
+            "(--floor) is experimental and not yet measured there. ")
+
+
 def _add_classify(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "classify",
@@ -408,7 +421,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
             "Say whether a thrown object is light (bounces: safe to pass) or heavy (slides: must avoid) "
             "from a video of it, with no camera calibration: the object's colour and size are enough to answer, "
             "though not to answer well: one scale per clip leaves the heights far off, and each answer quotes the "
-            "accuracy the study measured for its path. "
+            f"accuracy the study measured for its path. {_measured_words()}"
             "VIDEO_OR_CSV is a video (tracked as 'study track' does, its heights in metres from the object's "
             "mean apparent size) or a trajectory CSV from 'study track --out'; --manifest FILE does every "
             "video of a folder. The model: --model DIR (from 'study train'), else the one the last book "

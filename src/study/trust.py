@@ -4,7 +4,7 @@ p(heavy) where the study cannot tell the classes apart.
 
 The numbers come from the recommended model's file in the data folder (``study.runs.recommended``: what the book
 build there measured), else from the copy of a paper build's that ships with the package
-(``study.runs.recommended.SHIPPED``). :func:`for_answer` puts them together for one answer; :meth:`Trust.label`
+(``study.runs.measured.SHIPPED``). :func:`for_answer` puts them together for one answer; :meth:`Trust.label`
 turns p(heavy) into ``"light"``, ``"heavy"`` or :data:`CANNOT_TELL`.
 """
 
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from study import CLASSES
 from study.learn.metrics import Interval
-from study.runs import recommended
+from study.runs import measured, recommended
 from study.runs.stats import label_of
 from study.see import paths
 
@@ -60,12 +60,12 @@ def path_of(floor: bool, scale_from: str, metres_per_pixel: float | None) -> str
     return MEASURED_SCALE if metres_per_pixel is not None else scale_from
 
 
-def measurements(rec: recommended.Recommended | None) -> tuple[recommended.Measured, str]:
+def measurements(rec: recommended.Recommended | None) -> tuple[measured.Measured, str]:
     """What the sweep measured and where it comes from: the data folder's build (``rec``) if it measured it, else
     the shipped copy; empty and why when neither has it."""
     if rec is not None and rec.measured:
         return rec.measured, f"the camera sweep of the {rec.preset} build beside the recommended model"
-    shipped = recommended.read_shipped()
+    shipped = measured.read_shipped()
     if shipped is not None:
         return shipped.measured, f"the camera sweep of {shipped.source()}"
     return {}, "no build's camera sweep is at hand: build the book to measure it"
@@ -73,7 +73,7 @@ def measurements(rec: recommended.Recommended | None) -> tuple[recommended.Measu
 
 def for_answer(kind: str, path: str, rec: recommended.Recommended | None = None,
                band: tuple[float, float] | None = None) -> Trust:
-    """The trust of an answer by a model of ``kind`` (``study.runs.recommended.kind``) whose heights came by
+    """The trust of an answer by a model of ``kind`` (``study.runs.measured.kind``) whose heights came by
     ``path`` (:func:`path_of`); ``rec``: the data folder's recommended-model file, if any; ``band``: the answering
     model's cannot-tell band on this path (the recommended model's; None for any other)."""
     measured, source = measurements(rec)
@@ -85,7 +85,7 @@ def for_answer(kind: str, path: str, rec: recommended.Recommended | None = None,
         return Trust(None, source, band)
     if kind not in measured:
         return Trust(None, f"{source} scored no model of this kind ({kind}; it scored {', '.join(measured)})", band)
-    words = paths.BY_KEY[path].words if path in paths.BY_KEY else path
+    words = next((p.words for p in paths.PATHS if p.key == path), path)
     return Trust(measured[kind].get(path), f"{source}: models of this kind ({kind}) through the {words} path", band)
 
 

@@ -25,7 +25,7 @@ from study.methods.recommend import Recommendation, recommend
 from study.report.reported import count, number
 from study.report.text import Table, pct, pct_ci, points
 from study.report.usercamera import Numbers, PathKey, Sweep, SweepGroup, SweepPath
-from study.runs import recommended
+from study.runs.measured import kind
 from study.see import paths
 from study.simulate import measure
 from study.simulate.observe import CAMERA_FAMILIES
@@ -52,7 +52,7 @@ class CameraSweep:
     choice: str
     """The recommended candidate's name."""
     kinds: dict[str, str]
-    """Candidate name -> its kind (``study.runs.recommended.kind``)."""
+    """Candidate name -> its kind (``study.runs.measured.kind``)."""
     floors: dict[str, camera_cost.Floor]
     """Group -> the one-scale floor (true and tracked image rows)."""
     drag: dict[str, Interval]
@@ -98,7 +98,7 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
     drag = camera_cost.drag_rule(f_train, ds.train.y, clips, read(first)[0], fps, contact)
     times = sweep.render_times(clips)
     cpu, wall = (sum(t[k] for t in times.values()) for k in ("cpu_s", "wall_s"))
-    kinds = {name: recommended.kind(rec.configs[name]) for name in rec.models}
+    kinds = {name: kind(rec.configs[name]) for name in rec.models}
     return CameraSweep(tuple(clips), measured, rec.choice, kinds, camera_cost.floors(clips, tracked), drag,
                        camera_cost.size_error(clips, tracked, shape), (cpu, wall, len(times)))
 

@@ -28,6 +28,7 @@ from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, hierarchical_bootstrap
 from study.learn.trained import Ensemble
 from study.methods import calibration, certify, operating
+from study.runs import measured as measured_
 from study.runs import recommended as saved
 from study.runs import records
 from study.runs.stats import correct_of
@@ -149,7 +150,7 @@ def certified_band(runner: Runner, model: Ensemble, n_frames: int) -> tuple[floa
     return band(model.predict_proba(seen.astype(np.float32))[:, 1], y)
 
 
-def step_key(runner: Runner, measured: saved.Measured | None = None) -> str:
+def step_key(runner: Runner, measured: measured_.Measured | None = None) -> str:
     """The content key of :func:`make` on ``runner``: every candidate run's key (its data, config and the training
     code), the sweep's numbers and this module's code. The same key, the same saved model."""
     cands, seeds = candidates(runner), runner.preset.grid_seeds
@@ -160,7 +161,7 @@ def step_key(runner: Runner, measured: saved.Measured | None = None) -> str:
                       "sweep": sweep})
 
 
-def make(runner: Runner, measured: saved.Measured | None = None) -> Path:
+def make(runner: Runner, measured: measured_.Measured | None = None) -> Path:
     """The builder's step: :func:`recommend` saved in the data folder as the model ``study classify`` uses without
     ``--model`` (``study.runs.recommended``), for the one-scale path, with its cannot-tell band
     (:func:`certified_band`) and what the camera sweep ``measured`` for it and for every
@@ -173,7 +174,7 @@ def make(runner: Runner, measured: saved.Measured | None = None) -> Path:
     seeds, cfg = runner.preset.grid_seeds, rec.configs[rec.choice]
     dirs = tuple(records.model_dir(runner.dataset, dataclasses.replace(cfg, dims="z", seed=s),
                                    runner.data_dir, runner.device) for s in seeds)
-    accuracy = dict((measured or {}).get(saved.kind(cfg), {}))
+    accuracy = dict((measured or {}).get(measured_.kind(cfg), {}))
     one = saved.PathModel(rec.choice, dirs, rec.val_user[rec.choice], accuracy,
                           certified_band(runner, rec.model, cfg.n_frames(runner.fps)))
     return saved.save(runner.data_dir, runner.preset.name, {saved.ONE_SCALE: one}, key, measured or {})

@@ -55,7 +55,7 @@ class Sweep(Reported):
     render_cpu_s: Number | None = None
     """CPU seconds the clips took to render, as recorded when they were made (None: not recorded)."""
     kinds: dict[str, dict[PathKey, Number]] = named("kind", default_factory=dict)
-    """Every candidate, by its kind (``study.runs.recommended.kind``): its accuracy on all clips, exact heights and
+    """Every candidate, by its kind (``study.runs.measured.kind``): its accuracy on all clips, exact heights and
     by each path (what an answer quotes for a model of that kind)."""
 
 
@@ -71,7 +71,7 @@ class Numbers(Reported):
 def measured(leaves: Mapping[str, Leaf]) -> dict[str, dict[str, Interval]]:
     """What the camera sweep measured for each kind of model through each path (``usercamera.sweep.kind.*`` of a
     results file's ``leaves``), as intervals: what the recommended model's file and the package's shipped copy keep
-    (``study.runs.recommended.Measured``). Empty when the sweep is not among the leaves."""
+    (``study.runs.measured.Measured``). Empty when the sweep is not among the leaves."""
     if not any(k.startswith("usercamera.sweep.kind.") for k in leaves):
         return {}
     kinds = Sweep.read(leaves, "usercamera.sweep").kinds

@@ -15,9 +15,7 @@ trained on) through every path, and the preset and the content key of the step t
 keys, the sweep's numbers and its code), so the builder can tell that it is up to date. :func:`load` reads one
 path's model back as one classifier, the mean of its seeds' probabilities (``study.learn.trained.Ensemble``).
 
-A copy of what a paper build measured ships with the package (:data:`SHIPPED`, written by
-``scripts/shipped_measured.py`` from that build's results the way ``scripts/readme_findings.py`` writes the
-README's findings), so that an answer in a clone that has built no book still says how far to trust it.
+A copy of what a paper build measured ships with the package (``study.runs.measured``).
 """
 
 from __future__ import annotations
@@ -31,9 +29,9 @@ from typing import Any
 
 from study.core.cache import write_text_atomic
 from study.core.errors import ModelError
-from study.learn.config import TrainConfig
 from study.learn.metrics import Interval
 from study.learn.trained import Ensemble
+from study.runs.measured import Measured, measured_json, read_measured
 
 FILE = "recommended.json"
 """Its name in the data folder."""
@@ -44,21 +42,6 @@ ONE_SCALE = "one-scale"
 """The camera path of a video read by one scale per clip (``study classify`` without a floor)."""
 PATHS: tuple[str, ...] = (ONE_SCALE,)
 """The camera paths a recommended model can serve."""
-SHIPPED = Path(__file__).with_name("measured.json")
-"""The copy of a paper build's measurements shipped in the package (absent until one is written)."""
-SHIPPED_FORMAT = "study.measured/1"
-
-Measured = Mapping[str, Mapping[str, Interval]]
-"""Kind of model (:func:`kind`) -> how the heights were had (``exact`` or a path's key,
-``study.see.paths.PathKey``) -> its accuracy on the camera sweep's clips, pooled, with its interval."""
-
-
-def kind(cfg: TrainConfig) -> str:
-    """A model's kind as the camera sweep tells them apart: what it reads and what it was trained on,
-    ``"velocity-exact"``, ``"positions-any-camera"`` and so on."""
-    return f"{cfg.inputs}-{cfg.observe}"
-
-
 @dataclass(frozen=True)
 class PathModel:
     """The model recommended for one camera path, and what the study measured of it."""
@@ -109,14 +92,6 @@ class Recommended:
                 f"{100 * m.val.value:.1f} % on validation throws as a user's camera gives them)")
 
 
-def _measured_json(measured: Measured) -> dict[str, Any]:
-    return {k: {p: dataclasses.asdict(iv) for p, iv in by_path.items()} for k, by_path in measured.items()}
-
-
-def _measured(body: Mapping[str, Any]) -> dict[str, dict[str, Interval]]:
-    return {str(k): {str(p): Interval(**iv) for p, iv in by_path.items()} for k, by_path in body.items()}
-
-
 def save(data_dir: str | Path, preset: str, paths: Mapping[str, PathModel], key: str = "",
          measured: Measured | None = None) -> Path:
     """Write ``data_dir/recommended.json`` (atomically) and return its path."""
@@ -125,7 +100,7 @@ def save(data_dir: str | Path, preset: str, paths: Mapping[str, PathModel], key:
         raise ValueError(f"recommended.save: unknown camera paths {sorted(unknown)}; known: {PATHS}")
     root = Path(data_dir).resolve()
     body = {"format": FORMAT, "preset": preset, "key": key,
-            "paths": {k: m.as_json(root) for k, m in paths.items()}, "measured": _measured_json(measured or {})}
+            "paths": {k: m.as_json(root) for k, m in paths.items()}, "measured": measured_json(measured or {})}
     path = Path(data_dir) / FILE
     write_text_atomic(path, json.dumps(body, indent=1) + "\n")
     return path
@@ -162,7 +137,7 @@ def read(data_dir: str | Path) -> Recommended:
             paths = {ONE_SCALE: _path_model(body, Path(data_dir))}
         else:
             paths = {k: _path_model(v, Path(data_dir)) for k, v in body["paths"].items()}
-        return Recommended(str(body["preset"]), paths, str(body.get("key", "")), _measured(body.get("measured", {})))
+        return Recommended(str(body["preset"]), paths, str(body.get("key", "")), read_measured(body.get("measured", {})))
     except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError) as e:
         raise ModelError(f"{path} cannot be read ({type(e).__name__}: {e}); build the book again to rewrite it, "
                          "or pass --model DIR") from None
@@ -180,46 +155,3 @@ def load(data_dir: str | Path, path: str = ONE_SCALE) -> tuple[Ensemble, Recomme
                              "again, or pass --model DIR")
     return Ensemble(tuple(train.load(m) for m in rec.path(path).models)), rec
 
-
-@dataclass(frozen=True)
-class Shipped:
-    """What a paper build measured, as shipped in the package (:data:`SHIPPED`)."""
-
-    commit: str
-    """The commit the build was made from."""
-    preset: str
-    """Its preset."""
-    clips: int
-    """The camera sweep's clips."""
-    measured: Measured
-    """Kind -> path -> accuracy on the sweep."""
-    recommended: str = ""
-    """The kind of model that build recommended."""
-
-    def source(self) -> str:
-        return f"the {self.preset} build of {self.commit}, {self.clips} clips from random cameras"
-
-
-def write_shipped(path: str | Path, shipped: Shipped) -> Path:
-    """Write ``shipped`` as JSON at ``path`` (atomically)."""
-    body = {"format": SHIPPED_FORMAT, "commit": shipped.commit, "preset": shipped.preset, "clips": shipped.clips,
-            "recommended": shipped.recommended, "measured": _measured_json(shipped.measured)}
-    write_text_atomic(Path(path), json.dumps(body, indent=1) + "\n")
-    return Path(path)
-
-
-def read_shipped(path: str | Path | None = None) -> Shipped | None:
-    """The shipped copy at ``path`` (default :data:`SHIPPED`); None if there is none. :class:`ModelError` if it
-    cannot be read (a broken install: reinstall the package)."""
-    path = Path(SHIPPED if path is None else path)
-    if not path.is_file():
-        return None
-    try:
-        body = json.loads(path.read_text())
-        if body.get("format") != SHIPPED_FORMAT:
-            raise ValueError(f"format {body.get('format')!r}")
-        return Shipped(str(body["commit"]), str(body["preset"]), int(body["clips"]), _measured(body["measured"]),
-                       str(body.get("recommended", "")))
-    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError) as e:
-        raise ModelError(f"{path} cannot be read ({type(e).__name__}: {e}); reinstall the package, or regenerate "
-                         "it with scripts/shipped_measured.py from a paper build's results") from None

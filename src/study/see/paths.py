@@ -46,7 +46,6 @@ chapter): on the book's renders and on the camera sweep its heights are the clos
 truth, and the paths' accuracies cannot be told apart (the real-world chapter shows both)."""
 
 BY_WORDS: dict[str, CameraPath] = {p.words: p for p in PATHS}
-BY_KEY: dict[str, CameraPath] = {p.key: p for p in PATHS}
 
 PathKey = Literal[(EXACT, *(p.key for p in PATHS))]  # type: ignore[valid-type]
 """How a clip's heights were had: exactly, or by one of :data:`PATHS`."""
