@@ -9,28 +9,32 @@ checks the marks and says how well the floor fits (their reprojection error thro
 With the camera known, a frame's ray fixes the centre up to its depth, and the throw's physics fixes the depth
 (:func:`centres`):
 
-- **ground frames** (the object lies, rolls or slides): its centre is ``rest_height`` up, so the ray meets that plane
-  at the centre itself (a 5-frame running median against a box that rocks onto an edge, which lifts it a little);
-- **flights** between two contacts: the horizontal motion of a ballistic arc is uniform (drag aside), so the centre's
-  horizontal position is interpolated in time between the contacts at the arc's ends, and the height is where the
-  ray passes over it;
-- a flight with a contact at one end only (the first, from the throw): the arc is fitted to its pixels through the
-  camera, a ballistic parabola whose end meets the contact (its three velocities the unknowns).
+- **flights and contacts, fitted together** (:func:`_joint`): which frames fly comes from the image
+  (``study.see.geometry.phases``: the track's curvature in metres at each frame's rest-plane depth, the rows first
+  smoothed over :data:`SMOOTH_S`); each contact's time and pixel is where the image tracks on either side of it meet
+  (:func:`_contact`, a frame that still follows the flight's parabola moved into the flight). Between two contacts
+  the centre flies a ballistic arc (horizontal motion uniform, drag aside), the throw's first flight the arc that
+  ends at the first contact; every contact's 3-D point and the first flight's velocity are fitted at once to the
+  flights' pixels, each contact's pixel, and a prior that a contact's centre is near ``rest_height`` (a box landing
+  on an edge or corner sits higher: :data:`CONTACT_LIFT`);
+- **ground frames** (the object lies, rolls, slides or rocks between flights, :data:`BOUNCE_S`): its centre is
+  ``rest_height`` up, so the ray meets that plane at the centre itself (a 5-frame running median against a box
+  that rocks onto an edge, which lifts it a little).
 
-Which frames are flights comes from the image (``study.see.geometry.phases``: the track's curvature in metres, at
-each frame's rest-plane depth, the rows first smoothed over :data:`SMOOTH_S`). A centre placed where no throw could
-be is left unknown.
+A flight that never lands, and a centre placed where no throw could be, are left unknown.
 
 **Measured, and not yet good enough on video.** On inline scenes (``tests/test_floor.py``: a throw that turns at
-every bounce, four cameras) the heights are 1-7 mm RMS from exact pixels and under 3 cm with marks clicked a pixel
-off. On rendered video (``scripts/floor_sweep.py``, development clips of another seed than the sweep's) the
-tracker's pixels and a tumbling box's edges cost far more, most from low and high cameras: the contacts and the
-first flight need the weighing the floor-camera issue describes before the path is offered as the study's.
+every bounce, four cameras) the heights are under a centimetre RMS from exact pixels and under 3 cm with marks
+clicked a pixel off. On rendered video (``scripts/floor_sweep.py``, 20 development clips of another seed than the
+sweep's, marks clicked a pixel off) the heights are 25 mm RMS with each clip's median removed from the renderer's
+own pixels and 60 mm from the tracker's (the mean silhouette's one scale: 173 mm on the same clips): the tracker's
+pixels at the bounces, not the camera, are what is left.
 """
 
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -150,17 +154,6 @@ def calibrate(floor: Floor, width: int, height: int) -> Calibration:
                        len(floor.points))
 
 
-def _over(camera: Camera, u: np.ndarray, v: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """(n, 3) the point of each pixel's ray whose horizontal position is nearest ``xy`` (n, 2): where the ray passes
-    over it."""
-    d = camera.rays(u, v)
-    c = np.asarray(camera.position)
-    dh = d[:, :2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.sum((xy - c[:2]) * dh, axis=1) / np.sum(dh * dh, axis=1)
-    return c + s[:, None] * d
-
-
 def _median5(a: np.ndarray) -> np.ndarray:
     """A centred 5-frame running median of ``a`` (n, k), NaN ignored, shorter at the ends."""
     out = np.full_like(a, np.nan)
@@ -194,22 +187,6 @@ def _fit_arc(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, anchor
     span = float(np.mean(t[ok] - t_anchor))
     start = np.array([0.0, 0.0, 0.5 * G * span])  # a vertical arc of the flight's length
     return path(least_squares(residual, start, method="lm").x, t)
-
-
-def _first_flight(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, anchor: np.ndarray,
-                  t_anchor: float) -> np.ndarray:
-    """(len(t), 3) the centres of a flight that ends at the contact ``anchor`` (3,) at ``t_anchor`` and has none
-    before it: the arc fitted to its pixels (:func:`_fit_arc`) when it is seen in :data:`FIT_FRAMES` frames or more,
-    else each frame at the contact's depth (a throw across the view keeps its depth; the pixels' curvature over a
-    short hop cannot fix it)."""
-    if np.isfinite(u).sum() >= FIT_FRAMES:
-        return _fit_arc(camera, t, u, v, anchor, t_anchor)
-    return camera.position + camera.depth_of(anchor[None])[0] * camera.rays(u, v)
-
-
-FIT_FRAMES = 20
-"""Frames a flight needs for its pixels alone to fix its depth: the issue that set this path measured a 20-31-frame
-arc's depth to 0.03-0.40 m and a 9-11-frame hop's only to 0.1-1 m (360p)."""
 
 
 MAX_HEIGHT = 5.0
@@ -248,15 +225,155 @@ def _contact(t: np.ndarray, u: np.ndarray, v: np.ndarray, before: np.ndarray, af
              ) -> tuple[float, float, float]:
     """When and where (t, u, v) the object touched the ground between the frames ``before`` (the end of a flight)
     and ``after`` (the start of the next, or of the slide): where the image tracks of the two, each extrapolated as
-    a parabola, meet in the image row (the bounce itself is blurred over the frames between)."""
-    tb, ta = t[before][-5:], t[after][:5]
-    vb, va = _quad(tb, v[before][-5:]), _quad(ta, v[after][:5])
-    lo, hi = t[before][-1], t[after][0]
-    roots = np.roots(np.polysub(vb, va)) if np.any(np.polysub(vb, va)) else []
-    real = [float(r.real) for r in np.atleast_1d(roots) if abs(r.imag) < 1e-9 and lo - 1e-9 <= r.real <= hi + 1e-9]
-    tc = min(real, key=lambda r: abs(r - 0.5 * (lo + hi))) if real else 0.5 * (lo + hi)
-    ub, ua = _quad(tb, u[before][-5:]), _quad(ta, u[after][:5])
-    return tc, 0.5 * (np.polyval(ub, tc) + np.polyval(ua, tc)), 0.5 * (np.polyval(vb, tc) + np.polyval(va, tc))
+    a parabola, meet in the image row (the bounce itself is blurred over the frames between). Frames of ``after``
+    that come before that meeting still fly: they move to ``before`` and the two are met again."""
+    before, after = np.asarray(before), np.asarray(after)
+    tc = uc = vc = math.nan
+    for _ in range(4):  # at most a few frames late
+        tb, ta = t[before][-5:], t[after][:5]
+        vb, va = _quad(tb, v[before][-5:]), _quad(ta, v[after][:5])
+        lo, hi = t[before][-1], t[after][0]
+        diff = np.polysub(vb, va)
+        roots = np.roots(diff) if np.any(diff) else []
+        real = [float(r.real) for r in np.atleast_1d(roots) if abs(r.imag) < 1e-9 and lo - 1e-9 <= r.real <= hi + 1e-9]
+        tc = min(real, key=lambda r: abs(r - 0.5 * (lo + hi))) if real else 0.5 * (lo + hi)
+        ub, ua = _quad(tb, u[before][-5:]), _quad(ta, u[after][:5])
+        uc, vc = 0.5 * (np.polyval(ub, tc) + np.polyval(ua, tc)), 0.5 * (np.polyval(vb, tc) + np.polyval(va, tc))
+        # the first frame of `after` has not landed yet if its row follows the flight's parabola more closely than
+        # the parabola of the frames after it
+        if len(after) <= 6 or not np.isfinite(v[after[0]]):
+            break
+        rest = _quad(t[after][1:6], v[after][1:6])
+        off_flight = abs(np.polyval(vb, t[after[0]]) - v[after[0]])
+        if off_flight > EXTEND_PX or off_flight >= abs(np.polyval(rest, t[after[0]]) - v[after[0]]):
+            break
+        before, after = np.append(before, after[0]), after[1:]
+    return tc, uc, vc
+
+
+EXTEND_PX = 1.5
+"""A frame after a flight still flies while its image row lies within this many pixels of the flight's parabola
+(the phases' curvature blurs a flight's last frames into the bounce)."""
+
+
+CONTACT_LIFT = 0.5
+"""A contact's centre height prior: ``rest_height`` with a spread of this share of it (a box that lands on an edge or
+a corner touches with its centre up to 0.41 or 0.73 of its half-edge higher than when it lies flat)."""
+CONTACT_PX = 3.0
+"""The spread of a contact's pixel where the image tracks of the flights on either side meet, pixels (the bounce
+itself is blurred over the frames between)."""
+TRACK_PX = 2.0
+"""Beyond this many pixels a flight frame's misfit counts linearly, not squared (a tracker's jump)."""
+
+
+
+BOUNCE_S = 0.25
+"""Seconds between two flights' frames for one bounce to join them; a longer stretch between is on the ground (a
+slide, a box rocking on its edges), with a landing before it and a take-off after."""
+
+Flight = tuple[int | None, int, np.ndarray]
+"""A flight: the index of the contact it starts from (None: the throw's, no contact before it), of the contact that
+ends it, and its frames."""
+
+
+def _contacts(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, arcs: list[np.ndarray],
+              rest_height: float) -> tuple[list[tuple[float, np.ndarray]], list[Flight]]:
+    """The contacts (time, where the contact's ray meets the rest plane) and the flights between them, from the
+    image's flights ``arcs``: two flights a bounce apart (:data:`BOUNCE_S`) share a contact; with longer on the
+    ground between, the first lands and the next takes off. A flight that never lands is left out (unknown)."""
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    gap_max = max(2, int(round(BOUNCE_S / dt)))
+    contacts: list[tuple[float, np.ndarray]] = []
+
+    def contact(before: np.ndarray, after: np.ndarray) -> int | None:
+        if len(before) < 2 or len(after) < 2:
+            return None
+        tc, uc, vc = _contact(t, u, v, before, after)
+        point = _on_plane(camera, np.array([uc]), np.array([vc]), rest_height)[0]
+        if not np.isfinite(point).all():
+            return None
+        contacts.append((tc, point))
+        return len(contacts) - 1
+
+    flights: list[Flight] = []
+    start: int | None = None
+    for k, arc in enumerate(arcs):
+        nxt = arcs[k + 1] if k + 1 < len(arcs) else None
+        between = np.arange(arc[-1] + 1, nxt[0] if nxt is not None else len(t))
+        if nxt is not None and len(between) <= gap_max:  # a bounce
+            end = contact(arc, nxt)
+            after_start = end
+        else:  # a landing, then (if another flight follows) a take-off
+            end = contact(arc, between)
+            after_start = contact(between, nxt) if nxt is not None else None
+        if end is not None:
+            lo = contacts[start][0] if start is not None else -math.inf
+            frames = np.flatnonzero((t > lo) & (t <= contacts[end][0]))
+            if len(frames):
+                flights.append((start, end, frames))
+        start = after_start
+    return contacts, flights
+
+
+def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights: list[Flight],
+           contacts: list[tuple[float, np.ndarray]], rest_height: float) -> list[np.ndarray]:
+    """Each flight's centres (len(frames), 3), every flight and contact fitted at once through the camera: the
+    unknowns are each contact's 3-D point and the velocity of each flight with no contact before it; a flight
+    between two contacts is the ballistic arc through both (its horizontal motion uniform, its height a parabola in
+    g), one without the arc that ends at its contact. Least squares on the flights' pixels (robust beyond
+    :data:`TRACK_PX`), each contact's pixel (:data:`CONTACT_PX`) and its centre's height (``rest_height``, spread
+    :data:`CONTACT_LIFT` of it): the contacts, the arcs' curvature and the continuity between them weighed
+    together."""
+    from scipy.optimize import least_squares
+
+    tc = np.array([c[0] for c in contacts])
+    start = np.array([c[1] for c in contacts], np.float64)  # (K, 3) where each contact's ray meets the rest plane
+    seen_c = camera.project(start)
+    K = len(contacts)
+    free = [i for i, (a, _, _) in enumerate(flights) if a is None]  # flights with a velocity of their own
+    ok = [np.isfinite(u[f]) & np.isfinite(v[f]) for _, _, f in flights]
+    down = np.array([0.0, 0.0, -0.5 * G])
+
+    def arc(i: int, p: np.ndarray, vel: np.ndarray, times: np.ndarray) -> np.ndarray:
+        a, b, _ = flights[i]
+        if a is None:
+            dt = (times - tc[b])[:, None]
+            return p[b] + vel[free.index(i)] * dt + down * dt**2
+        w = ((times - tc[a]) / (tc[b] - tc[a]))[:, None]
+        sag = 0.5 * G * (times - tc[a]) * (tc[b] - times)
+        return (1 - w) * p[a] + w * p[b] + np.column_stack([0 * sag, 0 * sag, sag])
+
+    def unpack(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return x[: 3 * K].reshape(K, 3), x[3 * K:].reshape(len(free), 3)
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        p, vel = unpack(x)
+        parts = [(camera.project(arc(i, p, vel, t[f][o])) - np.column_stack([u[f][o], v[f][o]])).ravel()
+                 for i, ((_, _, f), o) in enumerate(zip(flights, ok)) if o.any()]
+        parts.append(((camera.project(p) - seen_c) / CONTACT_PX * TRACK_PX).ravel())
+        parts.append((p[:, 2] - rest_height) / (CONTACT_LIFT * rest_height) * TRACK_PX)
+        return np.concatenate(parts)
+
+    # Each free flight's velocity, guessed two ways: fitted alone at its contact, and at that contact's depth.
+    options = []
+    for i in free:
+        _, b, f = flights[i]
+        seen = f[ok[i]]
+        guesses = [np.zeros(3)]
+        if len(seen) >= 3:
+            guesses = []
+            for alone in (_fit_arc(camera, t[seen], u[seen], v[seen], start[b], tc[b]),
+                          camera.position + camera.depth_of(start[b:b + 1])[0] * camera.rays(u[seen], v[seen])):
+                dt = t[seen] - tc[b]
+                drop = alone - start[b] - down * dt[:, None] ** 2
+                guesses.append(np.linalg.lstsq(dt[:, None], drop, rcond=None)[0][0])
+        options.append(guesses)
+    starts = [np.concatenate([start.ravel(), *g]) for g in itertools.product(*options)] if options else \
+        [start.ravel()]
+    best = min((least_squares(residual, x0, loss="huber", f_scale=TRACK_PX, x_scale="jac") for x0 in starts),
+               key=lambda f: f.cost)
+    p, vel = unpack(best.x)
+    return [arc(i, p, vel, t[f]) for i, (_, _, f) in enumerate(flights)]
 
 
 def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_height: float
@@ -283,35 +400,14 @@ def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_he
     if arcs and arcs[-1][-1] >= n - 4:
         arcs[-1] = np.arange(arcs[-1][0], n)
     out = np.full((n, 3), np.nan)
-    ground = on_plane.copy()
-    if arcs:
-        # Each contact: after an arc, before the next one (or before the slide that follows the last).
-        rest = np.arange(arcs[-1][-1] + 1, n)
-        ends = [(arcs[k], arcs[k + 1]) for k in range(len(arcs) - 1)] + ([(arcs[-1], rest)] if len(rest) >= 2 else [])
-        contacts = []
-        for before, after in ends:
-            tc, uc, vc = _contact(t, u, v, before, after)
-            point = _on_plane(camera, np.array([uc]), np.array([vc]), rest_height)[0]
-            if np.isfinite(point).all():
-                contacts.append((tc, point))
-        if not contacts:  # flights, but no contact seen: the flights cannot be placed, the rest is on the ground
-            in_arc = np.zeros(n, bool)
-            in_arc[np.concatenate(arcs)] = True
-            ground = on_plane & ~in_arc
-        else:
-            ground = on_plane & (t > contacts[-1][0])  # the slide after the last contact
-        for k in range(len(contacts) + 1 if contacts else 0):  # the flights: before the first contact, then between
-            lo = contacts[k - 1][0] if k > 0 else -math.inf
-            hi = contacts[k][0] if k < len(contacts) else math.inf
-            inside = np.flatnonzero((t > lo) & (t <= hi) & ~ground)
-            if not len(inside) or (k == len(contacts) and k > 0):
-                continue
-            if k == 0:  # the throw's first flight, with no contact before it
-                out[inside] = _first_flight(camera, t[inside], u[inside], v[inside], contacts[0][1], contacts[0][0])
-                continue
-            (ta, pa), (tb, pb) = contacts[k - 1], contacts[k]
-            w = ((t[inside] - ta) / (tb - ta))[:, None]  # uniform horizontal motion between two contacts
-            out[inside] = _over(camera, u[inside], v[inside], (1 - w) * pa[:2] + w * pb[:2])
+    contacts, flights = _contacts(camera, t, u, v, arcs, rest_height)
+    in_flight = np.zeros(n, bool)  # a flight's frames, placed by the fit; an arc's that never lands stay unknown
+    for frames in [*arcs, *(f for _, _, f in flights)]:
+        in_flight[frames] = True
+    ground = on_plane & ~in_flight  # lying, sliding or rocking on the floor: on the rest plane
+    if flights:
+        for (_, _, frames), xyz in zip(flights, _joint(camera, t, u, v, flights, contacts, rest_height)):
+            out[frames] = xyz
     smoothed = _median5(np.where(ground[:, None], plane, np.nan)[:, :2])
     out[ground] = np.column_stack([smoothed[ground], np.full(ground.sum(), rest_height)])
     lost = ~(np.isfinite(u) & np.isfinite(v))

@@ -1,0 +1,78 @@
+"""Sample clips for a user to try the video path on (``study render``): throws of each class drawn from the study's
+priors and rendered as the book renders them, with everything a user's own folder would hold — the videos, a
+``MANIFEST.csv`` (file, label, colour, size and shape), and a ``FLOOR.csv`` of floor points at known positions
+with their pixels through the renderer's camera (as exact clicks on marks), for ``study classify --floor``; and,
+beside each video, its ground truth (``study.see.render``'s CSV).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from study import CLASSES
+from study.core.cache import write_text_atomic
+from study.core.errors import ConfigError, check_writable
+from study.core.progress import Progress
+from study.methods.videos import throw
+from study.see import render
+from study.see.camera import Camera
+from study.simulate import synth
+
+SEED = 7
+"""The throws' default seed: other throws than any split the book trains or tests on (those are seeds 0-2 and their
+offsets)."""
+MARKS = np.array([[x, y] for y in (-0.4, 0.4) for x in (-1.0, 0.0, 1.0)])
+"""Where the floor points lie, metres on the floor (x along the throw, y towards the camera's side): two rows of
+three, 2 m x 0.8 m, about the throw's path."""
+COLOR = "orange"
+"""The rendered object's colour (``study.see.config.COLORS``)."""
+
+
+def render_config(seed: int = SEED) -> render.RenderConfig:
+    """How a sample is filmed: 640 x 360 at 60 frames a second for 3 s, as a phone would, with motion blur, sensor
+    noise, JPEG loss and shadows."""
+    return render.RenderConfig(width=640, height=360, fps=60.0, duration=3.0, blur_subframes=2, noise_std=2.0,
+                               jpeg_quality=85, shadows=True, seed=seed)
+
+
+def floor_rows(camera: Camera, marks: np.ndarray = MARKS) -> list[tuple[float, float, float, float]]:
+    """The ``FLOOR.csv`` rows ``(u, v, x, y)`` of the floor points ``marks`` (n, 2) metres that ``camera`` sees inside
+    its image; :class:`ConfigError` when fewer than four are in view."""
+    uv = camera.project(np.column_stack([marks, np.zeros(len(marks))]))
+    inside = (uv[:, 0] >= 0) & (uv[:, 0] <= camera.width - 1) & (uv[:, 1] >= 0) & (uv[:, 1] <= camera.height - 1)
+    if inside.sum() < 4:
+        raise ConfigError(f"only {int(inside.sum())} of the floor points are in the camera's view; need four")
+    return [(float(u), float(v), float(x), float(y)) for (u, v), (x, y) in zip(uv[inside], marks[inside])]
+
+
+def write(out_dir: str | Path, per_class: int = 1, seed: int = SEED, progress: bool = True) -> list[Path]:
+    """Render ``per_class`` throws of each class into ``out_dir`` (``light_000.mp4``, ``heavy_000.mp4``, ... with
+    their truth CSVs), with ``MANIFEST.csv`` and ``FLOOR.csv``; returns the videos. Raises :class:`ConfigError` for
+    a bad ``per_class`` and ``DataError`` for a folder that cannot be written (before anything is rendered)."""
+    if not isinstance(per_class, int) or isinstance(per_class, bool) or not 1 <= per_class <= 20:
+        raise ConfigError(f"per_class = {per_class!r}; give a whole number of throws a class from 1 to 20")
+    out = Path(out_dir)
+    check_writable(out / "MANIFEST.csv", "sample folder")
+    cfg = synth.SynthConfig.preset("paper").replace(n_test=per_class)
+    rcfg = render_config(seed)
+    params = synth.sample_split(cfg, seed, "test")
+    edge = 2 * cfg.shape.size[0]  # the shape's sizes are half-extents
+    kind = {"box": "box", "sphere": "ball", "cylinder": "cylinder"}[cfg.shape.kind]
+    videos, rows = [], []
+    with Progress("render samples", total=len(params["label"]), show=progress, unit="video") as bar:
+        for i in range(len(params["label"])):
+            label = CLASSES[int(params["label"][i])]
+            video = out / f"{label}_{i:03d}.mp4"
+            model, qpos, qvel = throw(cfg, params, i)
+            render.render(model, qpos, qvel, video, rcfg)
+            videos.append(video)
+            rows.append(f"{video.name},{label},{COLOR},{edge:g},{kind}\n")
+            bar.update()
+    camera = render.scene_camera(model, rcfg.camera, rcfg.width, rcfg.height)
+    write_text_atomic(out / "FLOOR.csv", "u,v,x,y\n" + "".join(f"{u:.2f},{v:.2f},{x:g},{y:g}\n"
+                                                             for u, v, x, y in floor_rows(camera)))
+    write_text_atomic(out / "MANIFEST.csv", "file,label,color,object_size,object_shape\n" + "".join(rows))
+    return videos
+
