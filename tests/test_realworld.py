@@ -351,3 +351,9 @@ def test_a_manifest_is_read_strictly_an_unknown_column_a_colour_in_any_case_no_s
     assert realworld.read_manifest(tmp_path)[0].info["licence"] == "none stated", "the shared clips' notes are kept"
     with pytest.raises(DataError, match="--manifest .*nope: no such folder"):
         realworld.read_manifest(tmp_path / "nope", what="--manifest")
+
+
+def test_a_readers_folder_keeps_every_clip_and_the_shared_clips_a_presets_few(tmp_path):
+    clips = [realworld.Video(tmp_path / f"{i}.mp4", "light") for i in range(4)]
+    assert realworld.shown(clips, str(tmp_path), 2) == clips, "a folder the reader gave: every clip"
+    assert realworld.shown(clips, "", 2) == clips[:2], "the shared clips: the preset's few"

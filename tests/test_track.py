@@ -377,3 +377,19 @@ def test_track_and_classify_through_a_floor_the_user_marked(rendered, tmp_path, 
     marks.write_text("u,v,x,y\n1,2,3,4\n")
     rc = cli.main(["track", str(rendered.video), "--color", "orange", "--object-size", "0.2", "--floor", str(marks)])
     assert rc == 2 and "1 marks; give at least 4" in capsys.readouterr().err
+
+
+def test_sample_floor_points_are_those_the_camera_sees_and_four_are_needed():
+    from study.methods import sample
+    from study.see.camera import Camera
+
+    level = (1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0)  # columns: right = x, up = z, back = -y: it looks along +y
+    cam = Camera((0.0, -4.0, 1.2), level, 400.0, 640, 360)
+    assert cam.depth_of(np.zeros((1, 3)))[0] == pytest.approx(4.0), "the floor's middle is in front of it"
+    rows = sample.floor_rows(cam)
+    assert 4 <= len(rows) <= len(sample.MARKS)
+    assert all(0 <= u <= 639 and 0 <= v <= 359 for u, v, _, _ in rows)
+    np.testing.assert_allclose(cam.project(np.array([[x, y, 0.0] for _, _, x, y in rows])),
+                               np.array([[u, v] for u, v, _, _ in rows]), atol=1e-9)
+    with pytest.raises(ConfigError, match="in the camera's view; need four"):
+        sample.floor_rows(cam, sample.MARKS + 50.0)

@@ -413,6 +413,44 @@ def _measured_words() -> str:
             "(--floor) is experimental and not yet measured there. ")
 
 
+def _add_render(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "render",
+        help="render sample videos of a throw of each class, to try 'study track' and 'study classify' on",
+        description=(
+            "Render throws of each class (light and heavy, drawn from the study's priors, a 0.2 m orange box) "
+            "into OUT as a phone would film them (640 x 360, 60 frames a second, 3 s): the videos, a "
+            "MANIFEST.csv (file, label, color, object_size, object_shape) for 'study classify --manifest', "
+            "and a FLOOR.csv of six floor points at known positions with their pixels (as exact clicks on "
+            "floor marks) for '--floor'; beside each video its ground truth (.csv). About half a minute a "
+            "video. Prints the videos and the commands to try on them."
+        ),
+    )
+    p.add_argument("out", type=Path, metavar="OUT", help="the folder to write the samples into (made if missing)")
+    p.add_argument("--per-class", type=int, default=1, metavar="N", help="throws of each class (1-20; default 1)")
+    p.add_argument("--seed", type=int, default=None,
+                   help="seed of the throws (default: one no split of the book's trains or tests on)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+    def run(a: argparse.Namespace) -> int:
+        from study.core.errors import ConfigError
+        from study.methods import sample
+
+        if not 1 <= a.per_class <= 20:
+            raise ConfigError(f"--per-class {a.per_class}: give a whole number of throws a class from 1 to 20")
+        videos = sample.write(a.out, a.per_class, sample.SEED if a.seed is None else a.seed,
+                              progress=not a.no_progress)
+        first = videos[0]
+        print("\n".join(str(v) for v in videos))
+        print(f"try: study classify {first} --color {sample.COLOR} --object-size 0.2 --object-shape box "
+              f"--floor {a.out / 'FLOOR.csv'}\n"
+              f"     study classify {first} --color {sample.COLOR} --object-size 0.2 --object-shape box\n"
+              f"     study classify --manifest {a.out / 'MANIFEST.csv'}")
+        return 0
+
+    p.set_defaults(run=run)
+
+
 def _add_classify(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "classify",
@@ -554,7 +592,7 @@ def _add_results(sub: argparse._SubParsersAction) -> None:
 
 
 COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
-    _add_synth, _add_book, _add_train, _add_evaluate, _add_track, _add_classify, _add_results,
+    _add_synth, _add_book, _add_train, _add_evaluate, _add_render, _add_track, _add_classify, _add_results,
 ]
 
 
@@ -566,7 +604,8 @@ def build_parser() -> argparse.ArgumentParser:
             "The motion-pattern study (arXiv:1609.00361, rebuilt with MuJoCo, PyTorch and OpenCV): "
             "simulate trajectories, train and evaluate, build the book -- and your own video: 'study track VIDEO' "
             "follows a coloured object through it, 'study classify VIDEO --color C --object-size D' says light or "
-            "heavy. Run 'study COMMAND --help' for each command."
+            "heavy (and how far to trust it), 'study render OUT' makes sample clips to try them on. Run 'study "
+            "COMMAND --help' for each command."
         ),
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=_Parser)

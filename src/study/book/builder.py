@@ -332,9 +332,10 @@ def _execute(ch: Chapter, source_nb: Path, nb: Any, parameters: dict[str, Any], 
                 resources={"metadata": {"path": str(root)}},
                 progress_bar=False,  # the Follower shows what the chapter is doing instead
                 log_output=False,
-                # The kernel's own log (not the cells' output) only warns that its local TCP link is
-                # unencrypted; errors still show.
-                extra_arguments=["--IPKernelApp.log_level=ERROR"],
+                # The kernel's own log (not the cells' output) warns that its local TCP link is unencrypted and,
+                # when a chapter that stopped for its runs is shut down, logs the interrupt as an error; a cell's
+                # error and a dead kernel reach the build as exceptions, not through this log.
+                extra_arguments=["--IPKernelApp.log_level=CRITICAL"],
                 # A cell's output may reach the client seconds after its reply on a loaded machine (two chapters,
                 # a render and training on two cores); nbclient's 4 s wait for it then failed the chapter.
                 iopub_timeout=120,

@@ -358,6 +358,12 @@ def table1_model(runner: Runner) -> Ensemble:
     return Ensemble(tuple(runner.trained(dataclasses.replace(cfg, seed=s)) for s in runner.preset.seeds))
 
 
+def shown(real: Sequence[Video], video_dir: str, limit: int) -> list[Video]:
+    """The real clips the chapter classifies: every clip of a folder the reader gave (``video_dir``), or the first
+    ``limit`` of the shared clips beside the project (a small preset's few)."""
+    return list(real) if video_dir else list(real[:limit])
+
+
 def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = None, model_name: str = "",
             objects: str = REAL_OBJECTS, real_found: int | None = None) -> RealWorld:
     """The chapter *Real-world test* on ``runner``'s preset: its rendered throws and the ``real`` clips

@@ -64,7 +64,7 @@ def write(out_dir: str | Path, per_class: int = 1, seed: int = SEED, progress: b
     with Progress("render samples", total=len(params["label"]), show=progress, unit="video") as bar:
         for i in range(len(params["label"])):
             label = CLASSES[int(params["label"][i])]
-            video = out / f"{label}_{i:03d}.mp4"
+            video = out / f"{label}_{sum(CLASSES[int(c)] == label for c in params['label'][:i]):03d}.mp4"
             model, qpos, qvel = throw(cfg, params, i)
             render.render(model, qpos, qvel, video, rcfg)
             videos.append(video)
