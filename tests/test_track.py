@@ -393,3 +393,21 @@ def test_sample_floor_points_are_those_the_camera_sees_and_four_are_needed():
                                np.array([[u, v] for u, v, _, _ in rows]), atol=1e-9)
     with pytest.raises(ConfigError, match="in the camera's view; need four"):
         sample.floor_rows(cam, sample.MARKS + 50.0)
+
+
+def test_the_overlay_joins_found_frames_within_a_piece_never_across_a_filled_gap_or_a_jump(tmp_path):
+    from study.see import overlay
+
+    centres = [(20 + 12 * i, 60) for i in range(6)] + [None] * 3 + [(128 + 12 * i, 60) for i in range(4)] \
+        + [(250, 20)] + [(250, 20 + 2 * i) for i in range(1, 6)]
+    clip = blob_video(tmp_path / "blob.mp4", centres, size=(320, 120))
+    traj = track.track_video(clip, track.TrackConfig(color="orange", max_gap=5, progress=False))
+    assert (traj.status == 2).sum() == 3 and len(traj.segments()) == 1, "the gap is filled, the jump accepted"
+    jump = next(j for j in range(1, len(traj.t)) if traj.u[j] - traj.u[j - 1] > 30)
+    assert not overlay.joined(traj, jump) and not any(overlay.joined(traj, j) for j in range(6, 10))
+    assert overlay.joined(traj, 3) and overlay.joined(traj, jump + 2)
+    out = track.write_overlay(traj, tmp_path / "ov.mp4", tail=len(traj.t))
+    last = list(video.frames(out))[-1]
+    mid_gap, mid_jump = last[60, 98], last[40, 207]  # halfway along where straight lines would run
+    assert np.abs(mid_gap.astype(int) - 90).max() < 25 and np.abs(mid_jump.astype(int) - 90).max() < 25
+    assert np.abs(last[60, 50].astype(int) - 90).max() > 60, "the found frames before the gap are joined"
