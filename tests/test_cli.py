@@ -290,3 +290,12 @@ def test_classify_reports_the_missing_video_and_the_missing_size_before_the_mode
 def test_the_commands_help_names_the_video_path():
     text = " ".join(cli.build_parser().format_help().split())
     assert "study track VIDEO" in text and "study classify VIDEO --color C --object-size D" in text
+
+
+def test_train_help_puts_the_few_options_a_user_needs_first(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["train", "--help"])
+    out = capsys.readouterr().out
+    first, protocol = out.index("what to train (most users set only these)"), out.index("the training protocol")
+    assert first < out.index("\n  --observe ") < out.index("\n  --length ") < protocol < out.index("\n  --lr ")
+    assert protocol < out.index("\n  --patience ") and first < out.index("\n  --data ") < protocol

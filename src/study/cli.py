@@ -38,7 +38,7 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}; see {self.prog} --help\n")
 
 
-def _add_fields(p: argparse.ArgumentParser, cls: type, names: Sequence[str], *,
+def _add_fields(p: argparse.ArgumentParser | argparse._ArgumentGroup, cls: type, names: Sequence[str], *,
                 choices: dict[str, Sequence[str]] | None = None, more: dict[str, str] | None = None) -> None:
     """One option per field of the config dataclass ``cls``, its default, type, choices and help taken from the
     field itself (its docstring is the help, its ``Literal`` type the choices, its name the flag), so the command
@@ -192,6 +192,11 @@ def _add_book(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
+TRAIN_FIRST = ("dims", "inputs", "observe", "length", "seed")
+"""``study train``'s options a user needs (what the model reads, what it is trained on, how long its input is, its
+seed), shown first; the rest are the study's protocol."""
+
+
 def _add_train(sub: argparse._SubParsersAction) -> None:
     from study.learn.config import TrainConfig  # no torch
 
@@ -208,9 +213,13 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
             "validation accuracy and whether it failed to train (then a warning says what to change)."
         ),
     )
-    p.add_argument("--data", type=Path, required=True, help="dataset file (.npz) written by `study synth`")
-    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="model directory to write (replaced if it exists)")
-    _add_fields(p, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig)])
+    first = p.add_argument_group("what to train (most users set only these)")
+    first.add_argument("--data", type=Path, required=True, help="dataset file (.npz) written by `study synth`")
+    first.add_argument("--out", type=Path, required=True, metavar="DIR",
+                       help="model directory to write (replaced if it exists)")
+    _add_fields(first, TrainConfig, TRAIN_FIRST)
+    protocol = p.add_argument_group("the training protocol (the study's; change it to study the recipe)")
+    _add_fields(protocol, TrainConfig, [f.name for f in dataclasses.fields(TrainConfig) if f.name not in TRAIN_FIRST])
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     def run(a: argparse.Namespace) -> int:
