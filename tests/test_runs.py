@@ -329,3 +329,24 @@ def test_a_failed_run_is_listed_with_the_reason_the_book_means_it_to_fail_or_as_
     assert "first protocol" in failed[0]["reason"] and "Figure 4" in failed[1]["reason"]
     assert [f["model"] for f in failures.by_chance(failed)] == ["chance"]
     assert failures.reason(dc.asdict(dc.replace(long, forget_init="chrono"))) == failures.BY_CHANCE
+
+
+def test_a_run_still_improving_when_its_epoch_budget_ran_out_is_listed_as_not_flattened(tmp_path):
+    import dataclasses as dc
+
+    from study.learn.config import TrainConfig
+    from study.runs import cluster, failures
+
+    def record(name: str, cfg: TrainConfig, best: int, ran: int) -> str:
+        path = tmp_path / f"{name}.json"
+        path.write_text(json.dumps({"config": dc.asdict(cfg), "failed": False, "best_epoch": best, "epochs_run": ran,
+                                    "val_accuracy": 0.9}))
+        return str(path)
+
+    plan = tmp_path / "table1.jsonl"
+    plan.write_text("".join(json.dumps({"model": m, "record": record(m, c, b, r)}) + "\n" for m, c, b, r in (
+        ("climbing", TrainConfig(epochs=150), 149, 150), ("flat", TrainConfig(epochs=150), 120, 150),
+        ("stopped", TrainConfig(epochs=150), 60, 81), ("cosine", TrainConfig(epochs=40, lr_schedule="cosine"), 39, 40))))
+    got = cluster.plan_unsettled([plan])
+    assert [u["model"] for u in got] == ["climbing"] and got[0]["chapter"] == "table1" and got[0]["best_epoch"] == 149
+    assert failures.unsettled({"config": dc.asdict(TrainConfig(epochs=150)), "best_epoch": 140, "epochs_run": 150})

@@ -527,7 +527,8 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                       "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages, "steps": steps,
                       "runs": plan_totals(root),
                       "runs_by_chapter": cluster.plan_by_part([ch.plan_part for ch in chapters(root)]),
-                      "failed_runs": cluster.plan_failures([ch.plan_part for ch in chapters(root)])}
+                      "failed_runs": cluster.plan_failures([ch.plan_part for ch in chapters(root)]),
+                      "unsettled_runs": cluster.plan_unsettled([ch.plan_part for ch in chapters(root)])}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
             results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
@@ -782,7 +783,11 @@ def build(root: Path, preset: str, force: bool, only: list[str] | None, html: bo
         timings = execute(root, preset, force=force, only=only, scheduler=address, device=chosen, data_dir=data_dir)
     print(timings_table(timings, plan_totals(root)), file=sys.stderr)
     record = root / EXECUTED / "timings.json"
-    failed = json.loads(record.read_text()).get("failed_runs", []) if record.is_file() else []
+    kept = json.loads(record.read_text()) if record.is_file() else {}
+    failed, unsettled = kept.get("failed_runs", []), kept.get("unsettled_runs", [])
+    if unsettled:
+        print(f"runs still improving when their epoch budget ran out (not flattened): {len(unsettled)} "
+              f"({EXECUTED}/timings.json, 'unsettled_runs')", file=sys.stderr)
     if failed:
         chance = len(failures.by_chance(failed))
         print(f"failed runs: {len(failed)}, {len(failed) - chance} of them designed to fail, {chance} by chance "

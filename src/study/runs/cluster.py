@@ -81,6 +81,14 @@ def plan_failures(parts: Sequence[Path]) -> list[dict[str, Any]]:
     return failed_runs(_planned(parts))
 
 
+def plan_unsettled(parts: Sequence[Path]) -> list[dict[str, Any]]:
+    """Every run listed in the plan files ``parts`` that was still improving when its epoch budget ran out
+    (``study.runs.failures.unsettled_runs``)."""
+    from study.runs.failures import unsettled_runs
+
+    return unsettled_runs(_planned(parts))
+
+
 def plan_by_part(parts: Sequence[Path]) -> dict[str, dict[str, float]]:
     """:func:`plan_totals` of each plan file (by its name without suffix: the chapter), each model counted in the
     first part that lists it, so the parts add up to the whole: where a build's training time goes."""

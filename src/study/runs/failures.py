@@ -62,6 +62,36 @@ def failed_runs(planned: Mapping[str, tuple[str, Path]]) -> list[dict[str, Any]]
     return out
 
 
+SETTLE_EPOCHS = 10
+"""A run that could stop early but ran its whole epoch budget with its best epoch among the last this many had not
+flattened: its validation loss was still falling when the budget ran out."""
+
+
+def unsettled(record: Mapping[str, Any]) -> bool:
+    """Whether a run record's network was still improving when its epoch budget ran out (:data:`SETTLE_EPOCHS`); a
+    fixed budget ('cosine', no early stopping) is judged by its own schedule, not here."""
+    c = record["config"]
+    if c.get("lr_schedule") == "cosine" or record.get("epochs_run") is None or record.get("best_epoch") is None:
+        return False
+    return int(record["epochs_run"]) >= int(c["epochs"]) and int(record["best_epoch"]) >= int(c["epochs"]) - SETTLE_EPOCHS
+
+
+def unsettled_runs(planned: Mapping[str, tuple[str, Path]]) -> list[dict[str, Any]]:
+    """Every run of a build's plan (model key -> (its record's path, the chapter's plan file)) that had not flattened
+    (:func:`unsettled`), each with the chapter that first asked for it and what it is; unreadable records left out."""
+    out = []
+    for model, (record, part) in planned.items():
+        with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
+            rec = json.loads(Path(record).read_text())
+            if unsettled(rec):
+                c = rec["config"]
+                out.append({"chapter": part.stem, "model": model, "dims": c["dims"], "length": c["length"],
+                            "cell": c["cell"], "inputs": c["inputs"], "observe": c["observe"], "lr": c["lr"],
+                            "truncation": c["truncation"], "seed": c["seed"], "best_epoch": rec["best_epoch"],
+                            "epochs": c["epochs"], "val_accuracy": rec.get("val_accuracy")})
+    return out
+
+
 def by_chance(failed: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
     """The runs of :func:`failed_runs` that were not designed to fail."""
     return [f for f in failed if f["reason"] == BY_CHANCE]
