@@ -143,8 +143,9 @@ def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, s
     for source in (tmp_path / "t.csv", small_video):
         assert cli.main(["classify", str(source), "--model", str(out), "--color", "orange", "--object-size", "0.2",
                          "--object-shape", "box", "--scale-from", "mean", "--no-progress"]) == 0
-        line, note = capsys.readouterr().out.strip().splitlines()[-2:]
-        assert line.startswith(f"{source}: ") and ("light (p = " in line or "heavy (p = " in line), line
+        line, trust, note = capsys.readouterr().out.strip().splitlines()[-3:]
+        assert line.startswith(f"{source}: ") and ("light (p(heavy) = " in line or "heavy (p(heavy) = " in line), line
+        assert trust.startswith("  trust: ") and "mean silhouette path" in trust, trust
         assert note.startswith("  assumed: ") and "mm/px" in note and "frames found" in note, note
     # a track in pixels (no --object-size) is classified with the object's size given then, as the video is
     assert cli.main(["track", str(small_video), "--color", "orange", "--out", str(tmp_path / "px.csv"),
@@ -154,7 +155,7 @@ def test_a_velocity_model_classifies_a_csv_and_a_video(tmp_path, dataset_file, s
     labels = []
     for source in (tmp_path / "px.csv", small_video):
         assert cli.main(["classify", str(source), "--color", "orange", *flags]) == 0
-        line, note = capsys.readouterr().out.strip().splitlines()[-2:]
+        line, _, note = capsys.readouterr().out.strip().splitlines()[-3:]
         labels.append(line.split(": ")[1].split(" (")[0])
         assert "RMS over" in note, note
     assert labels[0] == labels[1], "the pixel CSV and its video get the same answer"

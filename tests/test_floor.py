@@ -118,3 +118,11 @@ def test_a_flight_whose_landing_is_never_seen_is_left_unknown_not_put_on_the_flo
     uv = cam.project(path[: first - 3])
     got = floor.heights(cal.camera, t[: first - 3], uv[:, 0], uv[:, 1], REST)
     assert not np.any(np.isclose(got, REST)), "a flight is not on the floor"
+
+
+def test_frames_the_floor_cannot_place_split_the_track_so_a_piece_holds_only_heights():
+    status = np.ones(10, np.int8)
+    segment = np.array([0, 0, 0, 0, 0, 0, 1, 1, 1, 1], np.int32)
+    placed = np.array([1, 1, 0, 0, 1, 1, 1, 0, 1, 1], bool)
+    st, seg = floor._unknown_split(status, segment, placed)
+    assert seg.tolist() == [0, 0, -1, -1, 1, 1, 2, -1, 3, 3] and st.tolist() == [1, 1, 0, 0, 1, 1, 1, 0, 1, 1]

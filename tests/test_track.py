@@ -245,8 +245,9 @@ def test_cli_classify_video_and_csv(rendered, tmp_path, z_model, capsys):
     assert x[:, 2].max() > 0.6  # metres: the box was thrown from 1 m
     p = tm.predict_proba(x[None])[0]
     k = int(p.argmax())
-    assert rc == 0 and out[0] == f"{rendered.video}: {('light', 'heavy')[k]} (p = {p[k]:.3f}; model {folder})"
-    assert len(out) == 2 and out[1].startswith("  assumed: scale ") and "RMS over" in out[1], "what it assumed"
+    assert rc == 0 and out[0] == f"{rendered.video}: {('light', 'heavy')[k]} (p(heavy) = {p[1]:.3f}; model {folder})"
+    assert len(out) == 3 and out[1].startswith("  trust: "), "how far to trust it"
+    assert out[2].startswith("  assumed: scale ") and "RMS over" in out[2], "what it assumed"
     track.write_csv(track.track_video(rendered.video, FAST), tmp_path / "px.csv")
     rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv")])  # scaled as a video would be:
     assert rc == 0 and "0.067 m over a" in capsys.readouterr().out  # by the object's size (a tennis ball's, unless told)
@@ -255,7 +256,8 @@ def test_cli_classify_video_and_csv(rendered, tmp_path, z_model, capsys):
     rc = cli.main(["classify", "--model", str(folder), str(old)])
     assert rc == 2 and "--metres-per-pixel" in capsys.readouterr().err
     rc = cli.main(["classify", "--model", str(folder), str(tmp_path / "px.csv"), "--metres-per-pixel", "0.01"])
-    assert rc == 0 and "(p = " in capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert rc == 0 and "(p(heavy) = " in said and "a scale you measured" in said
 
 
 def test_cli_classifies_a_manifest_of_two_colours_and_writes_the_answers(rendered, tmp_path, z_model, capsys):

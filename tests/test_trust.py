@@ -50,13 +50,13 @@ def test_an_answer_quotes_what_the_sweep_measured_for_its_kind_and_path_or_says_
     got = trust.for_answer("velocity-any-camera", "mean", rec)
     assert got.accuracy == IV and "paper build" in got.source and "mean silhouette path" in got.source
     assert trust.for_answer("velocity-any-camera", "gravity", rec).accuracy is None
+    assert "floor marks path (not measured there)" in trust.for_answer("velocity-any-camera", trust.FLOOR, rec).source
     missing = trust.for_answer("positions-fixed", "mean", rec)
     assert missing.accuracy is None and "no model of this kind (positions-fixed" in missing.source
-    assert "floor path is experimental" in trust.for_answer("velocity-any-camera", trust.FLOOR, rec).source
     assert "a scale you measured" in trust.for_answer("velocity-any-camera", trust.MEASURED_SCALE, rec).source
     monkeypatch.setattr(measured, "SHIPPED", tmp_path / "none.json")
     alone = trust.for_answer("velocity-any-camera", "mean", None)
-    assert alone.accuracy is None and "build the book" in alone.source
+    assert alone.accuracy is None and "build the book" in alone.source and "mean silhouette path" in alone.source
 
 
 def test_the_shipped_copy_reads_back_and_a_broken_one_is_named(tmp_path, monkeypatch):
@@ -100,4 +100,4 @@ def test_classify_help_quotes_the_shipped_measurements_or_says_there_are_none(tm
     monkeypatch.setattr(measured, "SHIPPED", tmp_path / "m.json")
     said = help_text()
     assert "On the paper build of abc1234, 80 clips from random cameras" in said
-    assert "labelled 52.5-64.2 % of the throws right through one scale" in said and "--floor) is experimental" in said
+    assert "labelled 52.5-64.2 % of the throws right through one scale, an unmeasured share through floor" in said

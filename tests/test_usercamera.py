@@ -65,6 +65,8 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     r = _result(cs)
     assert r.sweep_words.startswith("On 20 clips") and "most from the high cameras" in r.sweep_words
     assert "interval that holds 0" in r.default_words and "the default stays" in r.default_words
+    assert r.floor_marks_words.startswith("with 6 marks taped on the floor around the throw and clicked 1 pixel off")
+    assert "usercamera.sweep.all.floor.accuracy" in names and "usercamera.sweep.kind.velocity-exact.floor" in names
     assert "does not survive" in r.drag_words and "mean silhouette path" in r.drag_words
     assert r.depth_words == "7.5 % of the median camera distance, 4.0 m, is 30 cm of depth"
     assert "the tracker is not what limits" in r.floor_words
@@ -98,7 +100,7 @@ def test_the_shipped_copy_is_written_from_a_paper_builds_sweep_and_refused_from_
     (tmp_path / "paper.json").write_text(results.dumps(n.entries(), preset="paper"))
     got = script.shipped(tmp_path / "paper.json", "abc1234")
     assert got.clips == 20 and set(got.measured) == {"velocity-randomised", "velocity-exact"}
-    assert set(got.measured["velocity-exact"]) == {"exact", *(p for p in ("rest", "mean", "gravity", "geometry"))}
+    assert set(got.measured["velocity-exact"]) == {"exact", "rest", "mean", "gravity", "geometry", "floor"}
     assert measured.read_shipped(measured.write_shipped(tmp_path / "m.json", got)) == got
     (tmp_path / "smoke.json").write_text(results.dumps(n.entries(), preset="smoke"))
     with pytest.raises(SystemExit, match="'smoke' build"):

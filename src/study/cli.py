@@ -417,9 +417,10 @@ def _measured_words() -> str:
     shipped = read_shipped()
     if shipped is None:
         return "This copy of the package ships no such measurement; a book build makes one. "
+    floor = shipped.span("floor")
     return (f"On {shipped.source()}, the models the study compared labelled {shipped.span(DEFAULT)} of the throws "
-            f"right through one scale and {shipped.span('exact')} from their exact heights; the floor path "
-            "(--floor) is experimental and not yet measured there. ")
+            f"right through one scale, {floor or 'an unmeasured share'} through floor marks (--floor, experimental), "
+            f"and {shipped.span('exact')} from their exact heights. ")
 
 
 def _add_render(sub: argparse._SubParsersAction) -> None:

@@ -21,7 +21,7 @@ from study.see import paths
 CANNOT_TELL = "cannot tell"
 """The answer where p(heavy) falls inside the model's cannot-tell band: neither right nor wrong in a tally."""
 FLOOR = "floor"
-"""The path of heights placed through the camera that floor marks give (``--floor``; not yet on the sweep)."""
+"""The path of heights placed through the camera that floor marks give (``--floor``, experimental)."""
 MEASURED_SCALE = "measured scale"
 """The path of a scale the user measured (``--metres-per-pixel``): the sweep has no such path."""
 
@@ -77,16 +77,16 @@ def for_answer(kind: str, path: str, rec: recommended.Recommended | None = None,
     ``path`` (:func:`path_of`); ``rec``: the data folder's recommended-model file, if any; ``band``: the answering
     model's cannot-tell band on this path (the recommended model's; None for any other)."""
     measured, source = measurements(rec)
-    if path == FLOOR:
-        return Trust(None, "the floor path is experimental: the camera sweep has not measured it yet", band)
     if path == MEASURED_SCALE:
         return Trust(None, "a scale you measured: the camera sweep measured one scale read off the object", band)
+    words = next((p.words for p in paths.PATHS if p.key == path), path)
     if not measured:
-        return Trust(None, source, band)
+        return Trust(None, f"{source} (the {words} path)", band)
     if kind not in measured:
         return Trust(None, f"{source} scored no model of this kind ({kind}; it scored {', '.join(measured)})", band)
-    words = next((p.words for p in paths.PATHS if p.key == path), path)
-    return Trust(measured[kind].get(path), f"{source}: models of this kind ({kind}) through the {words} path", band)
+    got = measured[kind].get(path)
+    said = "" if got is not None else " (not measured there)"
+    return Trust(got, f"{source}: models of this kind ({kind}) through the {words} path{said}", band)
 
 
 def exact_warning(kind: str, which: str, rec: recommended.Recommended | None = None) -> str | None:

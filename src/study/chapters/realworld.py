@@ -76,7 +76,7 @@ from study.report.realworld import (
 from study.report.reported import Number, Verdict, number
 from study.report.text import Table, pct, pct_ci
 from study.runs import paper
-from study.see import track, video
+from study.see import render, track, video
 
 if TYPE_CHECKING:
     from study.runs.runner import Runner
@@ -384,7 +384,8 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
     labels = {key: (classify(m, rendered, tracks_r, progress=False), classify(m, real, tracks_q, progress=False))
               for key, (_, m) in models.items()}
     shape = camera_cost.shape_of(runner.synth_config)
-    on_renders = [camera_cost.video_heights(v, shape) for v in rendered]  # each tracked once, read every way
+    side = render.scene_camera(render.class_model("light"), rcfg.camera, rcfg.width, rcfg.height)  # the scene's own
+    on_renders = [camera_cost.video_heights(v, shape, side) for v in rendered]  # each tracked once, read every way
     tracks_u = user_tracks(rendered, on_renders)
     render_heights = camera_cost.height_errors(on_renders)
     user = {key: classify(m, rendered, tracks_u, progress=False) for key, (_, m) in models.items()}

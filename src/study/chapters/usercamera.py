@@ -241,14 +241,28 @@ class UserCamera:
 
 
     @property
+    def floor_marks_words(self) -> str:
+        """What marks on the floor give: the floor path's height error and the recommended model's accuracy through
+        it, beside the default one-scale path's and the exact heights'."""
+        res = self.camera.recommended.results["all"]
+        fl, default = res[camera_cost.FLOOR_PATH], res[camera_cost.DEFAULT_PATH]
+        mm = "no heights" if math.isnan(fl.rms_centred_mm) else f"{fl.rms_centred_mm:.0f} mm off"
+        return (f"with {len(camera_cost.FLOOR_MARKS)} marks taped on the floor around the throw and clicked "
+                f"{camera_cost.CLICK_PX:g} pixel off, the camera is known: the heights are {mm} (each clip's median "
+                f"removed; one scale, {default.rms_centred_mm:.0f} mm), and the recommended model labels "
+                f"{pct_ci(fl.accuracy)} of the throws right through them ({pct_ci(default.accuracy)} through one "
+                f"scale, {pct_ci(res['exact'].accuracy)} from the exact heights)")
+
+    @property
     def default_words(self) -> str:
-        """Which path a user should take: the best path's paired difference against the default."""
+        """Which one-scale path a user without floor marks should take: the best one's paired difference against
+        the default."""
         m = self.camera.recommended
         res = m.results["all"]
         default = camera_cost.DEFAULT_PATH
-        best = max(camera_cost.PATHS, key=lambda k: res[k].accuracy.value)
+        best = max(camera_cost.ONE_SCALE, key=lambda k: res[k].accuracy.value)
         if best == default:
-            return f"the default ({default}) is also the most accurate path on the sweep"
+            return f"the default ({default}) is also the most accurate one-scale path on the sweep"
         diff = m.difference(best, default)
         if diff.lo <= 0 <= diff.hi:
             return (f"the most accurate path, {best}, beats the default ({default}) by {points(diff)}, an "

@@ -10,7 +10,10 @@ A path reads only the video and what a user knows (the object's colour, shape an
 - ``gravity``: one scale, g over the free flights' image curvature (``study.see.scale.gravity_scale``), the ground
   at the lowest centre position;
 - ``geometry``: the camera's tilt, height and focal length fitted with gravity as the ruler
-  (``study.see.geometry.recover``).
+  (``study.see.geometry.recover``);
+- ``floor marks``: the camera from marks a user taped on the floor around the throw (:data:`FLOOR_MARKS`, their
+  pixels as a careful click gives them: the camera's projection plus :data:`CLICK_PX` of noise; no re-render), then
+  each frame's centre through it (``study.see.floor``: ``study classify --floor``).
 
 The exact path classifies the renderer's true heights: the camera's cost is the exact path's accuracy minus a
 user path's, on the same clips and seeds (a paired bootstrap). A clip a path cannot turn into heights (the object
@@ -20,19 +23,21 @@ lost, no free flight) gets no answer and counts as a miss; :class:`PathResult` s
 from __future__ import annotations
 
 import math
+import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from study.core.errors import StudyError
+from study.core.errors import ConfigError, StudyError
 from study.core.progress import Progress
 from study.learn.metrics import Interval, bootstrap_accuracy, bootstrap_difference
 from study.methods import sweep
 from study.methods.sweep import Clip
 from study.methods.videos import Video
 from study.runs.stats import correct_of
-from study.see import geometry, paths, render, track
+from study.see import floor, geometry, paths, render, track
+from study.see.camera import Camera
 from study.see.gaps import set_scale
 from study.see.scale import DEFAULT, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
@@ -40,6 +45,13 @@ from study.simulate import measure as motion
 
 PATHS: tuple[str, ...] = tuple(p.words for p in paths.PATHS)
 """The user's paths from pixels to metres by their words, in the order the tables show them (``study.see.paths``)."""
+FLOOR_PATH = next(p.words for p in paths.PATHS if p.key == "floor")
+"""The path through floor marks (it needs the clip's camera to place the marks)."""
+FLOOR_MARKS = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])
+"""Where the floor path's marks lie, metres on the floor about the throw's middle: a 2 m x 1.5 m rectangle's corners
+and the middles of its long sides."""
+CLICK_PX = 1.0
+"""A careful click's error on a mark, pixels (standard deviation, each coordinate)."""
 
 
 def shape_of(cfg) -> ObjectShape:
@@ -86,12 +98,26 @@ class Heights:
 
 def heights(clip: Clip, shape: ObjectShape) -> Heights:
     """Track ``clip`` once (pixels) and turn it into heights by every path of :data:`PATHS`, for an object of
-    ``shape``."""
-    return video_heights(clip.video, shape)
+    ``shape`` (the floor path through marks placed by the clip's camera)."""
+    truth = render.read_truth(clip.video.truth)
+    return video_heights(clip.video, shape, sweep.camera(clip.shot, np.column_stack([truth["x"], truth["y"],
+                                                                                       truth["z"]])))
 
 
-def video_heights(v: Video, shape: ObjectShape) -> Heights:
-    """:func:`heights` of any rendered video (one with ground truth)."""
+def clicked_floor(camera: Camera, path: np.ndarray, name: str) -> floor.Floor:
+    """The floor marks a user would tape about a throw whose centre follows ``path`` (n, 3) metres
+    (:data:`FLOOR_MARKS` about its middle) as ``camera`` sees them and a careful click gives them (:data:`CLICK_PX`
+    of noise, seeded by the clip's ``name``): those in the picture."""
+    xy = path[:, :2].mean(axis=0) + FLOOR_MARKS
+    px = camera.project(np.column_stack([xy, np.zeros(len(xy))]))
+    px = px + np.random.default_rng(zlib.crc32(name.encode())).normal(0.0, CLICK_PX, px.shape)
+    inside = (px[:, 0] >= 0) & (px[:, 0] <= camera.width - 1) & (px[:, 1] >= 0) & (px[:, 1] <= camera.height - 1)
+    return floor.Floor(px[inside], xy[inside], name)
+
+
+def video_heights(v: Video, shape: ObjectShape, camera: Camera | None = None) -> Heights:
+    """:func:`heights` of any rendered video (one with ground truth); the floor path only where its ``camera`` is
+    given."""
     truth = render.read_truth(v.truth)
     rest = v.rest_height
     exact = truth["z"] - rest
@@ -103,7 +129,13 @@ def video_heights(v: Video, shape: ObjectShape) -> Heights:
         return Heights(exact, dict.fromkeys(PATHS, str(e)), {})
     for name in PATHS:
         try:
-            t = SCALE[name](px, shape)
+            if name == FLOOR_PATH:
+                if camera is None:
+                    raise ConfigError("no floor marks: the video's camera is not known")
+                world = np.column_stack([truth["x"], truth["y"], truth["z"]])
+                t, _ = floor.on_floor(px, clicked_floor(camera, world, v.path.name), rest)
+            else:
+                t = SCALE[name](px, shape)
         except StudyError as e:
             paths[name] = str(e)
             continue

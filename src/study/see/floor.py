@@ -453,4 +453,17 @@ def on_floor(traj: Trajectory, floor: Floor, rest_height: float) -> tuple[Trajec
     if seen.sum() < 3:
         raise GeometryError(f"{traj.source}: fewer than 3 frames could be placed through the floor's camera")
     scale = float(np.median(cal.camera.depth_of(xyz[seen]) / cal.camera.focal))
-    return replace(traj, z=xyz[:, 2], ground_z=rest_height, units="m", height_per_pixel=scale), cal
+    status, segment = _unknown_split(traj.status, traj.segment, seen)
+    return replace(traj, z=xyz[:, 2], ground_z=rest_height, units="m", height_per_pixel=scale, status=status,
+                   segment=segment), cal
+
+
+def _unknown_split(status: np.ndarray, segment: np.ndarray, placed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The track's status (n,) and pieces (n,) with the frames the floor's camera could not place (``placed``
+    False) lost: each such run of frames splits its piece, so a piece holds only frames with a height."""
+    lost = ~placed | (segment < 0)
+    piece = np.cumsum(np.r_[True, lost[:-1] & ~lost[1:]] | np.r_[True, segment[1:] != segment[:-1]])
+    out = np.where(lost, -1, piece)
+    kept = np.unique(out[out >= 0])
+    renumbered = np.where(out >= 0, np.searchsorted(kept, out), -1).astype(segment.dtype)
+    return np.where(lost, 0, status).astype(status.dtype), renumbered

@@ -23,7 +23,8 @@ class CameraPath:
     """What the book calls it."""
     one_scale: bool
     """True: one metres-per-pixel scale for the whole clip (``study.see.scale.read_scale(how=key)``); False: the
-    camera's geometry fitted frame by frame (``study.see.geometry``)."""
+    camera's geometry fitted frame by frame (``study.see.geometry``), or given by marks on the floor
+    (``study.see.floor``, ``--floor``)."""
 
 
 PATHS: tuple[CameraPath, ...] = (
@@ -31,6 +32,7 @@ PATHS: tuple[CameraPath, ...] = (
     CameraPath("mean", "mean silhouette", one_scale=True),
     CameraPath("gravity", "gravity", one_scale=True),
     CameraPath("geometry", "geometry", one_scale=False),
+    CameraPath("floor", "floor marks", one_scale=False),
 )
 """Every path, in the order the tables show them."""
 
