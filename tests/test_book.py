@@ -439,7 +439,7 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
         assert "Figure size" not in text, f"{ch.stem}: a figure was rendered as text"
         assert "injected by papermill" not in text.lower() and "# Parameters" not in text, ch.stem
         if ch.source.read_text().startswith("---\njupytext"):
-            assert "preset, a small run for tests" in text, f"{ch.stem}: a smoke page must say so at its top"
+            assert "preset build, for tests" in text, f"{ch.stem}: a smoke page must say so at its top"
             nb = nbformat.read(ch.executed, as_version=4)
             pngs = sum(k.endswith("image/png") for c in nb.cells for o in c.get("outputs", []) for k in o.get("data", {}))
             assert text.count("<img") >= pngs, ch.stem
@@ -448,7 +448,7 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
     api = (tmp_path / "_build" / "html" / "book" / "api.html").read_text()
     assert all(f'id="study.{name}"' in api for name in ("fit", "dataset", "classify", "TrainConfig")), "autodoc ran"
     tutorial = (tmp_path / "_build" / "html" / "book" / "tutorial.html").read_text()
-    assert "test accuracy" in tutorial and "assumed: scale" in tutorial and "executed:" in tutorial, "every step ran"
+    assert "test accuracy" in tutorial and "trust: " in tutorial and "executed:" in tutorial, "every step ran"
     from study.book import results, summary
 
     built = results.load(tmp_path / results.FILE)  # refuses a stored verdict its inputs do not decide
@@ -623,5 +623,5 @@ def test_a_page_built_with_a_small_preset_says_so_under_its_title_and_the_studys
         return nb
 
     smoke = nbtidy.preset_warning(page(), "smoke").cells[0].source
-    assert smoke.startswith("# Table 1\n\n```{warning}") and "**smoke** preset" in smoke and smoke.endswith("The answer.")
+    assert smoke.startswith("# Table 1\n\n```{warning}") and "**smoke** preset build, for tests" in smoke and smoke.endswith("The answer.")
     assert nbtidy.preset_warning(page(), "paper").cells[0].source == "# Table 1\n\nThe answer."

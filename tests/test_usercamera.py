@@ -65,7 +65,7 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     r = _result(cs)
     assert r.sweep_words.startswith("On 20 clips") and "most from the high cameras" in r.sweep_words
     assert "interval that holds 0" in r.default_words and "the default stays" in r.default_words
-    assert r.floor_marks_words.startswith("with 6 marks taped on the floor around the throw and clicked 1 pixel off")
+    assert r.floor_marks_words.startswith("with 6 marks taped around the throw, the heights are")
     assert "usercamera.sweep.all.floor.accuracy" in names and "usercamera.sweep.kind.velocity-exact.floor" in names
     assert "does not survive" in r.drag_words and "mean silhouette path" in r.drag_words
     assert r.depth_words == "7.5 % of the median camera distance, 4.0 m, is 30 cm of depth"

@@ -71,8 +71,7 @@ def figures_as_text(nb: Any) -> list[int]:
 STUDY_PRESET = "paper"
 """The preset whose numbers are the study's."""
 PRESET_WARNING = """```{{warning}}
-This page was built with the **{preset}** preset, a small run for tests: its numbers and verdicts are that run's,
-not the study's. `make book` builds the study (preset `paper`).
+A **{preset}** preset build, for tests: not the study's numbers.
 ```"""
 """What a page built with another preset says under its title."""
 

@@ -247,11 +247,9 @@ class UserCamera:
         res = self.camera.recommended.results["all"]
         fl, default = res[camera_cost.FLOOR_PATH], res[camera_cost.DEFAULT_PATH]
         mm = "no heights" if math.isnan(fl.rms_centred_mm) else f"{fl.rms_centred_mm:.0f} mm off"
-        return (f"with {len(camera_cost.FLOOR_MARKS)} marks taped on the floor around the throw and clicked "
-                f"{camera_cost.CLICK_PX:g} pixel off, the camera is known: the heights are {mm} (each clip's median "
-                f"removed; one scale, {default.rms_centred_mm:.0f} mm), and the recommended model labels "
-                f"{pct_ci(fl.accuracy)} of the throws right through them ({pct_ci(default.accuracy)} through one "
-                f"scale, {pct_ci(res['exact'].accuracy)} from the exact heights)")
+        return (f"with {len(camera_cost.FLOOR_MARKS)} marks taped around the throw, the heights are {mm} (one "
+                f"scale: {default.rms_centred_mm:.0f} mm) and the recommended model labels {pct_ci(fl.accuracy)} "
+                f"right ({pct_ci(default.accuracy)} with one scale)")
 
     @property
     def default_words(self) -> str:
