@@ -300,3 +300,13 @@ def test_train_help_puts_the_few_options_a_user_needs_first(capsys):
     first, protocol = out.index("what to train (most users set only these)"), out.index("the training protocol")
     assert first < out.index("\n  --observe ") < out.index("\n  --length ") < protocol < out.index("\n  --lr ")
     assert protocol < out.index("\n  --patience ") and first < out.index("\n  --data ") < protocol
+
+
+def test_a_manifest_takes_the_floor_for_every_clip_and_a_bad_one_is_refused_first(tmp_path, capsys):
+    (tmp_path / "a.mp4").write_bytes(b"not read: the floor is checked first")
+    (tmp_path / "MANIFEST.csv").write_text("file,label,color,object_size,object_shape\na.mp4,light,orange,0.2,box\n")
+    (tmp_path / "FLOOR.csv").write_text("u,v,x,y\n1,2,0,0\n")
+    rc = cli.main(["classify", "--manifest", str(tmp_path / "MANIFEST.csv"), "--floor", str(tmp_path / "FLOOR.csv"),
+                   "--model", str(tmp_path / "no-model")])
+    line = one_error_line(capsys)
+    assert rc == 2 and "FLOOR.csv" in line and "four" in line, line

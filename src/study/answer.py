@@ -270,11 +270,13 @@ def manifest_folder(manifest: str | Path, what: str = "manifest") -> Path:
 
 def classify_manifest(manifest: str | Path, model: str | Path | TrainedModel | Ensemble | None = None, *,
                       color: str = "tennis", object_size: float | None = None, scale_from: str = DEFAULT,
-                      data_dir: str | Path | None = None, what: str = "manifest") -> list[FolderAnswer]:
+                      data_dir: str | Path | None = None, what: str = "manifest",
+                      floor: str | Path | Floor | None = None) -> list[FolderAnswer]:
     """Every video of a ``MANIFEST.csv`` (``study.methods.videos.read_manifest``: its file, label if known, colour or
     HSV range, size and shape; ``color`` and ``object_size`` for rows that give none, a tennis ball's size only for
     the tennis colour) classified as :func:`classify` does, by one model loaded once. A video that cannot be
-    tracked or scaled gets its error, and the others go on. ``what`` names the manifest in errors (``--manifest``).
+    tracked or scaled gets its error, and the others go on. ``what`` names the manifest in errors (``--manifest``);
+    ``floor``: one ``FLOOR.csv`` for every clip (a camera that stood still), as :func:`classify` takes it.
 
     Example::
 
@@ -285,11 +287,12 @@ def classify_manifest(manifest: str | Path, model: str | Path | TrainedModel | E
     from study.methods.videos import read_manifest
 
     videos = read_manifest(manifest_folder(manifest, what), color=color, object_size=object_size)  # before the model
+    marks = read_floor(floor) if isinstance(floor, (str, Path)) else floor
     got = _model(model, data_dir)
     out = []
     for v in videos:
         try:
-            ans = _answer(v.path, got, v.track_config(), v.object_shape(), scale_from, None, v.rest_height)
+            ans = _answer(v.path, got, v.track_config(), v.object_shape(), scale_from, None, v.rest_height, marks)
             out.append(FolderAnswer(v.path.name, v.label, ans))
         except StudyError as e:
             out.append(FolderAnswer(v.path.name, v.label, None, str(e)))

@@ -300,9 +300,9 @@ def _add_object_options(p: argparse.ArgumentParser, tennis_default: bool) -> Non
                    help="four or more marks on the floor (five or more recommended): a CSV with the header u,v,x,y, "
                    "one row per mark, its pixel in the video (u right, v down, the top-left pixel's centre at 0,0) "
                    "and its position on the floor in metres. The camera they give places each frame's centre (its "
-                   "contacts on the floor, its flights between them) instead of one scale for the whole video. "
-                   "Experimental: on rendered video its heights are not yet as close as on clean pixels "
-                   "(scripts/floor_sweep.py measures them)")
+                   "contacts on the floor, its flights between them) instead of one scale for the whole video; with "
+                   "--manifest, for every clip of the folder (a camera that stood still). Experimental: on rendered "
+                   "video its heights are not yet as close as on clean pixels (scripts/floor_sweep.py measures them)")
 
 
 def _object_shape(a: argparse.Namespace):
@@ -533,7 +533,7 @@ def _classify_manifest(a: argparse.Namespace) -> int:
         check_writable(a.out, "answers CSV")  # before the tracking, not after it
     rows = answer.classify_manifest(a.manifest, a.model, color=a.color,
                                     object_size=a.object_size[0] if a.object_size else None,
-                                    scale_from=a.scale_from, data_dir=a.data_dir, what="--manifest")
+                                    scale_from=a.scale_from, data_dir=a.data_dir, what="--manifest", floor=a.floor)
     for w in next((r.answer.warnings for r in rows if r.answer), ()):  # one model answered them all
         _warn(w)
     for r in rows:
