@@ -62,13 +62,13 @@ def path_of(floor: bool, scale_from: str, metres_per_pixel: float | None) -> str
 
 def measurements(rec: recommended.Recommended | None) -> tuple[measured.Measured, str]:
     """What the sweep measured and where it comes from: the data folder's build (``rec``) if it measured it, else
-    the shipped copy; empty and why when neither has it."""
+    the shipped copy; empty and '' when neither has it."""
     if rec is not None and rec.measured:
         return rec.measured, f"the camera sweep of the {rec.preset} build beside the recommended model"
     shipped = measured.read_shipped()
     if shipped is not None:
         return shipped.measured, f"the camera sweep of {shipped.source()}"
-    return {}, "no build's camera sweep is at hand: build the book to measure it"
+    return {}, ""
 
 
 def for_answer(kind: str, path: str, rec: recommended.Recommended | None = None,
@@ -81,7 +81,8 @@ def for_answer(kind: str, path: str, rec: recommended.Recommended | None = None,
         return Trust(None, "a scale you measured: the camera sweep measured one scale read off the object", band)
     words = next((p.words for p in paths.PATHS if p.key == path), path)
     if not measured:
-        return Trust(None, f"{source} (the {words} path)", band)
+        return Trust(None, f"no build's camera sweep is at hand for the {words} path: build the book to measure it",
+                     band)
     if kind not in measured:
         return Trust(None, f"{source} scored no model of this kind ({kind}; it scored {', '.join(measured)})", band)
     got = measured[kind].get(path)
