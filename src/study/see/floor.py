@@ -255,8 +255,6 @@ def _contact(t: np.ndarray, u: np.ndarray, v: np.ndarray, before: np.ndarray, af
 EXTEND_PX = 1.5
 """A frame after a flight still flies while its image row lies within this many pixels of the flight's parabola
 (the phases' curvature blurs a flight's last frames into the bounce)."""
-
-
 CONTACT_LIFT = 0.5
 """A contact's centre height prior: ``rest_height`` with a spread of this share of it (a box that lands on an edge or
 a corner touches with its centre up to 0.41 or 0.73 of its half-edge higher than when it lies flat)."""
@@ -265,9 +263,6 @@ CONTACT_PX = 3.0
 itself is blurred over the frames between)."""
 TRACK_PX = 2.0
 """Beyond this many pixels a flight frame's misfit counts linearly, not squared (a tracker's jump)."""
-
-
-
 BOUNCE_S = 0.25
 """Seconds between two flights' frames for one bounce to join them; a longer stretch between is on the ground (a
 slide, a box rocking on its edges), with a landing before it and a take-off after."""
