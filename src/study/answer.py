@@ -201,9 +201,9 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
                f"(the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m up at rest")
     x = track.to_model_input(traj, m.fps, m.n_frames, rest_height=rest)
     p_heavy = float(m.predict_proba(x[None])[0, 1])
-    path = path_of(floor is not None, scale_from, metres_per_pixel)
-    band = got.rec.path().band if got.recommended and got.rec is not None and path in SCALE_FROM else None
-    trust = for_answer(got.kind, path, got.rec, band)
+    route = path_of(floor is not None, scale_from, metres_per_pixel)  # how the heights were had
+    band = got.rec.path().band if got.recommended and got.rec is not None and route in SCALE_FROM else None
+    trust = for_answer(got.kind, route, got.rec, band)
     piece = traj.longest()
     members = m.members if isinstance(m, Ensemble) else (m,)
     assumed = (f"{how}; read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames "
