@@ -31,8 +31,6 @@ from study.see.scale import ObjectShape
 sys.path.insert(0, str(Path(__file__).parent))
 from ground_points_sweep import _rms, dlt  # noqa: E402  (the same clicks and the same RMS as the one-plane path)
 
-MARKS = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])
-"""The marks around the throw's middle, metres on the floor."""
 
 
 def measure(folder: Path, click_px: float) -> None:
@@ -45,7 +43,7 @@ def measure(folder: Path, click_px: float) -> None:
         truth = render.read_truth(video.with_suffix(".csv"))
         world = np.column_stack([truth["x"], truth["y"], truth["z"]])
         pm = dlt(world, np.column_stack([truth["u"], truth["v"]]))
-        xy = world[:, :2].mean(axis=0) + MARKS
+        xy = world[:, :2].mean(axis=0) + floor.MARKS
         hom = pm @ np.column_stack([xy, np.zeros(len(xy)), np.ones(len(xy))]).T
         clicks = (hom[:2] / hom[2]).T + rng.normal(0.0, click_px, (len(xy), 2))
         fam = r["family"]

@@ -51,9 +51,7 @@ def marks(cam, path: np.ndarray, noise: float, k: int = 6, seed: int = 0) -> flo
     """``k`` floor marks around the throw (a 2 m x 1.5 m rectangle's corners, then points on its sides), their pixels
     as a careful click gives them: the exact projection plus ``noise`` pixels."""
     mid = path[:, :2].mean(axis=0)
-    xy = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])[:k] + mid
-    px = cam.project(np.column_stack([xy, np.zeros(k)]))
-    return floor.Floor(px + np.random.default_rng(seed).normal(0.0, noise, px.shape), xy)
+    return floor.seen(cam, floor.MARKS[:k] + mid, noise, seed)
 
 
 @pytest.mark.parametrize("height, tilt, yaw", [(1.0, 5.0, 0.0), (1.7, 30.0, -45.0), (2.0, 40.0, 30.0),

@@ -324,7 +324,7 @@ def test_a_failed_run_is_listed_with_the_reason_the_book_means_it_to_fail_or_as_
     plan.write_text("".join(json.dumps({"model": m, "record": record(m, c, f)}) + "\n" for m, c, f in (
         ("first", first, True), ("long", long, True), ("chance", TrainConfig(seed=3), True),
         ("fine", TrainConfig(), False))))
-    failed = cluster.plan_failures([plan])
+    failed = cluster.plan_listed([plan])["failed_runs"]
     assert [f["model"] for f in failed] == ["first", "long", "chance"] and {f["chapter"] for f in failed} == {"table1"}
     assert "first protocol" in failed[0]["reason"] and "Figure 4" in failed[1]["reason"]
     assert [f["model"] for f in failures.by_chance(failed)] == ["chance"]
@@ -347,6 +347,6 @@ def test_a_run_still_improving_when_its_epoch_budget_ran_out_is_listed_as_not_fl
     plan.write_text("".join(json.dumps({"model": m, "record": record(m, c, b, r)}) + "\n" for m, c, b, r in (
         ("climbing", TrainConfig(epochs=150), 149, 150), ("flat", TrainConfig(epochs=150), 120, 150),
         ("stopped", TrainConfig(epochs=150), 60, 81), ("cosine", TrainConfig(epochs=40, lr_schedule="cosine"), 39, 40))))
-    got = cluster.plan_unsettled([plan])
+    got = cluster.plan_listed([plan])["unsettled_runs"]
     assert [u["model"] for u in got] == ["climbing"] and got[0]["chapter"] == "table1" and got[0]["best_epoch"] == 149
     assert failures.unsettled({"config": dc.asdict(TrainConfig(epochs=150)), "best_epoch": 140, "epochs_run": 150})

@@ -46,7 +46,7 @@ def _rec(measured):
 
 
 def test_an_answer_quotes_what_the_sweep_measured_for_its_kind_and_path_or_says_why_not(tmp_path, monkeypatch):
-    rec = _rec({"velocity-any-camera": {"exact": IV, "mean": IV}})
+    rec = trust.measurements(_rec({"velocity-any-camera": {"exact": IV, "mean": IV}}))
     got = trust.for_answer("velocity-any-camera", "mean", rec)
     assert got.accuracy == IV and "paper build" in got.source and "mean silhouette path" in got.source
     assert trust.for_answer("velocity-any-camera", "gravity", rec).accuracy is None
@@ -55,7 +55,7 @@ def test_an_answer_quotes_what_the_sweep_measured_for_its_kind_and_path_or_says_
     assert missing.accuracy is None and "no model of this kind (positions-fixed" in missing.source
     assert "a scale you measured" in trust.for_answer("velocity-any-camera", trust.MEASURED_SCALE, rec).source
     monkeypatch.setattr(measured, "SHIPPED", tmp_path / "none.json")
-    alone = trust.for_answer("velocity-any-camera", "mean", None)
+    alone = trust.for_answer("velocity-any-camera", "mean", trust.measurements(None))
     assert alone.accuracy is None and "build the book" in alone.source and "mean silhouette path" in alone.source
 
 
@@ -65,11 +65,11 @@ def test_the_shipped_copy_reads_back_and_a_broken_one_is_named(tmp_path, monkeyp
     assert shipped.span("mean") == "64.2-64.2 %" and shipped.span("floor") == ""
     assert measured.read_shipped(measured.write_shipped(path, shipped)) == shipped
     monkeypatch.setattr(measured, "SHIPPED", path)
-    got = trust.for_answer("velocity-exact", "mean")
+    got = trust.for_answer("velocity-exact", "mean", trust.measurements(None))
     assert got.accuracy == IV and "paper build of abc1234, 80 clips" in got.source
-    warned = trust.exact_warning("velocity-exact", "model m")
+    warned = trust.exact_warning("velocity-exact", "model m", trust.measurements(None))
     assert warned is not None and "exact trajectories" in warned and "64.2 % [52.9, 75.0]" in warned
-    assert "--observe any-camera" in warned and trust.exact_warning("velocity-any-camera", "model m") is None
+    assert "--observe any-camera" in warned and trust.exact_warning("velocity-any-camera", "model m", trust.measurements(None)) is None
     path.write_text('{"format": "study.measured/1"}')
     with pytest.raises(ModelError, match=f"{path} cannot be read"):
         measured.read_shipped(path)

@@ -26,7 +26,7 @@ from study.see.config import TrackConfig
 from study.see.floor import Floor, on_floor, read_floor
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
-from study.trust import CANNOT_TELL, Trust, exact_warning, for_answer, path_of
+from study.trust import CANNOT_TELL, Measurements, Trust, exact_warning, for_answer, measurements, path_of
 
 TENNIS_BALL = ObjectShape("sphere", (0.067,))
 """A tennis ball, 6.7 cm across."""
@@ -104,13 +104,14 @@ def shape(size: float | tuple[float, ...] = 0.067, kind: str = "ball") -> Object
 
 @dataclass(frozen=True)
 class _Model:
-    """The model that answers, what to call it, and the data folder's recommended-model file (None: none read)."""
+    """The model that answers, what to call it, its cannot-tell band, and what the camera sweep measured (read once
+    for every video it answers)."""
 
     model: TrainedModel | Ensemble
     which: str
-    rec: recommended.Recommended | None
-    recommended: bool
-    """Whether it is that file's model (its band applies)."""
+    band: tuple[float, float] | None
+    """The recommended model's band on the one-scale paths (None: no band, or not the recommended model)."""
+    seen: Measurements
 
     @property
     def kind(self) -> str:
@@ -123,12 +124,12 @@ def _model(model: str | Path | TrainedModel | Ensemble | None, data_dir: str | P
 
     if model is None:
         ensemble, rec = recommended.load(datadir.resolve(data_dir))
-        return _Model(ensemble, rec.describe(), rec, True)
+        return _Model(ensemble, rec.describe(), rec.path().band, measurements(rec))
     m = model if isinstance(model, (TrainedModel, Ensemble)) else load_model(model)
     rec = None
     with contextlib.suppress(ModelError):  # only for what its build measured of models of this kind
         rec = recommended.read(datadir.resolve(data_dir))
-    return _Model(m, "the model given" if m is model else f"model {model}", rec, False)
+    return _Model(m, "the model given" if m is model else f"model {model}", None, measurements(rec))
 
 
 def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | None = None, *,
@@ -139,12 +140,13 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
     tennis-yellow ball) or a trajectory CSV from ``study track --out`` (pixels are scaled as a video's are).
 
     ``model``: a trained Z model (a folder, or a loaded model or ensemble); None: the model the last book build in
-    ``data_dir`` recommends. The scale: ``metres_per_pixel`` if you measured it, else read off ``object_shape``
-    (by default a tennis ball, for the tennis colour only: :data:`BY_COLOUR`) as ``scale_from`` says ('mean': its mean apparent size; 'rest'; 'gravity'). ``rest_height``: the centre's
-    height at rest, metres (default: the shape's). ``floor``: a ``FLOOR.csv`` of four or more floor marks (their
-    pixels and positions, ``study.see.floor.read_floor``), or the marks: the camera they give places each frame's
-    centre (no one scale; the size then sets only the rest height). Raises ``ModelError`` for a model that does not read heights
-    only, ``ConfigError`` for a track in pixels with nothing to scale it by, ``TrackingError`` / ``GeometryError`` /
+    ``data_dir`` recommends. The scale: ``metres_per_pixel`` if you measured it, else read off ``object_shape`` (by
+    default a tennis ball, for the tennis colour only: :data:`BY_COLOUR`) as ``scale_from`` says ('mean': its mean
+    apparent size; 'rest'; 'gravity'). ``rest_height``: the centre's height at rest, metres (default: the shape's).
+    ``floor``: a ``FLOOR.csv`` of four or more floor marks (their pixels and positions,
+    ``study.see.floor.read_floor``), or the marks: the camera they give places each frame's centre (no one scale;
+    the size then sets only the rest height). The answer says how far to trust it (``study.trust``). Raises
+    ``ModelError`` for a model that does not read heights only, ``ConfigError`` for a track in pixels with nothing to scale it by, ``TrackingError`` / ``GeometryError`` /
     ``VideoError`` naming the file and what to do.
 
     Example::
@@ -202,8 +204,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
     x = track.to_model_input(traj, m.fps, m.n_frames, rest_height=rest)
     p_heavy = float(m.predict_proba(x[None])[0, 1])
     route = path_of(floor is not None, scale_from, metres_per_pixel)  # how the heights were had
-    band = got.rec.path().band if got.recommended and got.rec is not None and route in SCALE_FROM else None
-    trust = for_answer(got.kind, route, got.rec, band)
+    trust = for_answer(got.kind, route, got.seen, got.band if route in SCALE_FROM else None)
     piece = traj.longest()
     members = m.members if isinstance(m, Ensemble) else (m,)
     assumed = (f"{how}; read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames "
@@ -212,7 +213,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
     warnings = (f"{which}: {len(failed)} of {len(members)} seed(s) failed to train (on their validation throws they "
                 "could not be told from a coin), so their answers are near chance: retrain ('study train' with "
                 "another --seed) or pass another --model",) if failed else ()
-    exact = exact_warning(got.kind, which, got.rec)
+    exact = exact_warning(got.kind, which, got.seen)
     return Answer(str(source), trust.label(p_heavy), max(p_heavy, 1.0 - p_heavy), p_heavy, which, assumed, traj,
                   warnings + ((exact,) if exact else ()), trust)
 

@@ -14,7 +14,9 @@ from dataclasses import dataclass
 
 from study import CLASSES
 from study.learn.metrics import Interval
-from study.runs import measured, recommended
+from study.report.text import pct_ci
+from study.runs import recommended
+from study.runs.measured import Measured, read_shipped
 from study.runs.stats import label_of
 from study.see import paths
 
@@ -46,8 +48,7 @@ class Trust:
         return CLASSES[label_of(p_heavy)]
 
     def __str__(self) -> str:
-        acc = ("not measured" if self.accuracy is None else
-               f"{100 * self.accuracy.value:.1f} % [{100 * self.accuracy.lo:.1f}, {100 * self.accuracy.hi:.1f}] right")
+        acc = "not measured" if self.accuracy is None else f"{pct_ci(self.accuracy)} right"
         band = ("" if self.band is None else
                 f"; cannot tell for p(heavy) {self.band[0]:.2f}-{self.band[1]:.2f}")
         return f"{acc} ({self.source}){band}"
@@ -60,23 +61,32 @@ def path_of(floor: bool, scale_from: str, metres_per_pixel: float | None) -> str
     return MEASURED_SCALE if metres_per_pixel is not None else scale_from
 
 
-def measurements(rec: recommended.Recommended | None) -> tuple[measured.Measured, str]:
+@dataclass(frozen=True)
+class Measurements:
+    """What the camera sweep measured, and where that comes from (read once for every answer a model gives)."""
+
+    measured: Measured
+    """Kind -> path -> accuracy on the sweep; empty when no build's sweep is at hand."""
+    source: str = ""
+    """Which sweep: the data folder's build, or the shipped copy's ('' for none)."""
+
+
+def measurements(rec: recommended.Recommended | None) -> Measurements:
     """What the sweep measured and where it comes from: the data folder's build (``rec``) if it measured it, else
-    the shipped copy; empty and '' when neither has it."""
+    the shipped copy; empty when neither has it."""
     if rec is not None and rec.measured:
-        return rec.measured, f"the camera sweep of the {rec.preset} build beside the recommended model"
-    shipped = measured.read_shipped()
+        return Measurements(rec.measured, f"the camera sweep of the {rec.preset} build beside the recommended model")
+    shipped = read_shipped()
     if shipped is not None:
-        return shipped.measured, f"the camera sweep of {shipped.source()}"
-    return {}, ""
+        return Measurements(shipped.measured, f"the camera sweep of {shipped.source()}")
+    return Measurements({})
 
 
-def for_answer(kind: str, path: str, rec: recommended.Recommended | None = None,
-               band: tuple[float, float] | None = None) -> Trust:
+def for_answer(kind: str, path: str, seen: Measurements, band: tuple[float, float] | None = None) -> Trust:
     """The trust of an answer by a model of ``kind`` (``study.runs.measured.kind``) whose heights came by
-    ``path`` (:func:`path_of`); ``rec``: the data folder's recommended-model file, if any; ``band``: the answering
+    ``path`` (:func:`path_of`); ``seen``: what the sweep measured (:func:`measurements`); ``band``: the answering
     model's cannot-tell band on this path (the recommended model's; None for any other)."""
-    measured, source = measurements(rec)
+    measured, source = seen.measured, seen.source
     if path == MEASURED_SCALE:
         return Trust(None, "a scale you measured: the camera sweep measured one scale read off the object", band)
     words = next((p.words for p in paths.PATHS if p.key == path), path)
@@ -90,15 +100,14 @@ def for_answer(kind: str, path: str, rec: recommended.Recommended | None = None,
     return Trust(got, f"{source}: models of this kind ({kind}) through the {words} path{said}", band)
 
 
-def exact_warning(kind: str, which: str, rec: recommended.Recommended | None = None) -> str | None:
+def exact_warning(kind: str, which: str, seen: Measurements) -> str | None:
     """For a model trained on exact trajectories given a video: a warning saying what the sweep measured for such
-    models through the default path, and what to use instead; None for any other kind."""
+    models through the default path (``seen``: :func:`measurements`), and what to use instead; None for any other
+    kind."""
     if not kind.endswith("-exact"):
         return None
-    measured, source = measurements(rec)
-    got = measured.get(kind, {}).get(paths.DEFAULT)
+    got = seen.measured.get(kind, {}).get(paths.DEFAULT)
     said = ("" if got is None else
-            f"; on {source}, such models labelled {100 * got.value:.1f} % [{100 * got.lo:.1f}, {100 * got.hi:.1f}] "
-            "of the throws right through one scale")
+            f"; on {seen.source}, such models labelled {pct_ci(got)} of the throws right through one scale")
     return (f"{which} was trained on exact trajectories, not on heights a camera gives{said}. For video, use the "
             "recommended model (no --model) or train with --observe any-camera")

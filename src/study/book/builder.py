@@ -527,8 +527,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                       "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages, "steps": steps,
                       "runs": plan_totals(root),
                       "runs_by_chapter": cluster.plan_by_part([ch.plan_part for ch in chapters(root)]),
-                      "failed_runs": cluster.plan_failures([ch.plan_part for ch in chapters(root)]),
-                      "unsettled_runs": cluster.plan_unsettled([ch.plan_part for ch in chapters(root)])}
+                      **cluster.plan_listed([ch.plan_part for ch in chapters(root)])}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
             results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings

@@ -385,7 +385,7 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
               for key, (_, m) in models.items()}
     shape = camera_cost.shape_of(runner.synth_config)
     side = render.scene_camera(render.class_model("light"), rcfg.camera, rcfg.width, rcfg.height)  # the scene's own
-    on_renders = [camera_cost.video_heights(v, shape, side) for v in rendered]  # each tracked once, read every way
+    on_renders = [camera_cost.video_heights(v, shape, lambda _: side) for v in rendered]  # tracked once, read every way
     tracks_u = user_tracks(rendered, on_renders)
     render_heights = camera_cost.height_errors(on_renders)
     user = {key: classify(m, rendered, tracks_u, progress=False) for key, (_, m) in models.items()}

@@ -26,7 +26,7 @@ from study.report.reported import count, number
 from study.report.text import Table, pct, pct_ci, points
 from study.report.usercamera import Numbers, PathKey, Sweep, SweepGroup, SweepPath
 from study.runs.measured import kind
-from study.see import paths
+from study.see import floor, paths
 from study.simulate import measure
 from study.simulate.observe import CAMERA_FAMILIES
 
@@ -247,7 +247,7 @@ class UserCamera:
         res = self.camera.recommended.results["all"]
         fl, default = res[camera_cost.FLOOR_PATH], res[camera_cost.DEFAULT_PATH]
         mm = "no heights" if math.isnan(fl.rms_centred_mm) else f"{fl.rms_centred_mm:.0f} mm off"
-        return (f"with {len(camera_cost.FLOOR_MARKS)} marks taped around the throw, the heights are {mm} (one "
+        return (f"with {len(floor.MARKS)} marks taped around the throw, the heights are {mm} (one "
                 f"scale: {default.rms_centred_mm:.0f} mm) and the recommended model labels {pct_ci(fl.accuracy)} "
                 f"right ({pct_ci(default.accuracy)} with one scale)")
 

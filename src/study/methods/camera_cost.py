@@ -11,8 +11,8 @@ A path reads only the video and what a user knows (the object's colour, shape an
   at the lowest centre position;
 - ``geometry``: the camera's tilt, height and focal length fitted with gravity as the ruler
   (``study.see.geometry.recover``);
-- ``floor marks``: the camera from marks a user taped on the floor around the throw (:data:`FLOOR_MARKS`, their
-  pixels as a careful click gives them: the camera's projection plus :data:`CLICK_PX` of noise; no re-render), then
+- ``floor marks``: the camera from marks a user taped on the floor around the throw (``study.see.floor.MARKS``,
+  their pixels as a careful click gives them: the camera's projection plus :data:`CLICK_PX` of noise; no re-render), then
   each frame's centre through it (``study.see.floor``: ``study classify --floor``).
 
 The exact path classifies the renderer's true heights: the camera's cost is the exact path's accuracy minus a
@@ -47,9 +47,6 @@ PATHS: tuple[str, ...] = tuple(p.words for p in paths.PATHS)
 """The user's paths from pixels to metres by their words, in the order the tables show them (``study.see.paths``)."""
 FLOOR_PATH = next(p.words for p in paths.PATHS if p.key == "floor")
 """The path through floor marks (it needs the clip's camera to place the marks)."""
-FLOOR_MARKS = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])
-"""Where the floor path's marks lie, metres on the floor about the throw's middle: a 2 m x 1.5 m rectangle's corners
-and the middles of its long sides."""
 CLICK_PX = 1.0
 """A careful click's error on a mark, pixels (standard deviation, each coordinate)."""
 
@@ -99,26 +96,23 @@ class Heights:
 def heights(clip: Clip, shape: ObjectShape) -> Heights:
     """Track ``clip`` once (pixels) and turn it into heights by every path of :data:`PATHS`, for an object of
     ``shape`` (the floor path through marks placed by the clip's camera)."""
-    truth = render.read_truth(clip.video.truth)
-    return video_heights(clip.video, shape, sweep.camera(clip.shot, np.column_stack([truth["x"], truth["y"],
-                                                                                       truth["z"]])))
+    return video_heights(clip.video, shape, lambda world: sweep.camera(clip.shot, world))
 
 
 def clicked_floor(camera: Camera, path: np.ndarray, name: str) -> floor.Floor:
     """The floor marks a user would tape about a throw whose centre follows ``path`` (n, 3) metres
-    (:data:`FLOOR_MARKS` about its middle) as ``camera`` sees them and a careful click gives them (:data:`CLICK_PX`
-    of noise, seeded by the clip's ``name``): those in the picture."""
-    xy = path[:, :2].mean(axis=0) + FLOOR_MARKS
-    px = camera.project(np.column_stack([xy, np.zeros(len(xy))]))
-    px = px + np.random.default_rng(zlib.crc32(name.encode())).normal(0.0, CLICK_PX, px.shape)
-    inside = (px[:, 0] >= 0) & (px[:, 0] <= camera.width - 1) & (px[:, 1] >= 0) & (px[:, 1] <= camera.height - 1)
-    return floor.Floor(px[inside], xy[inside], name)
+    (``study.see.floor.MARKS`` about its middle) as ``camera`` sees them and a careful click gives them
+    (:data:`CLICK_PX` of noise, seeded by the clip's ``name``): those in the picture."""
+    xy = path[:, :2].mean(axis=0) + floor.MARKS
+    return floor.seen(camera, xy, CLICK_PX, zlib.crc32(name.encode()), name)
 
 
-def video_heights(v: Video, shape: ObjectShape, camera: Camera | None = None) -> Heights:
-    """:func:`heights` of any rendered video (one with ground truth); the floor path only where its ``camera`` is
-    given."""
+def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], Camera] | None = None) -> Heights:
+    """:func:`heights` of any rendered video (one with ground truth); the floor path only where ``camera`` gives
+    the video's camera from its true centres (n, 3) metres (the sweep's depends on the throw)."""
     truth = render.read_truth(v.truth)
+    world = np.column_stack([truth["x"], truth["y"], truth["z"]])
+    marks = None if camera is None else clicked_floor(camera(world), world, v.path.name)
     rest = v.rest_height
     exact = truth["z"] - rest
     paths: dict[str, np.ndarray | str] = {}
@@ -129,13 +123,12 @@ def video_heights(v: Video, shape: ObjectShape, camera: Camera | None = None) ->
         return Heights(exact, dict.fromkeys(PATHS, str(e)), {})
     for name in PATHS:
         try:
-            if name == FLOOR_PATH:
-                if camera is None:
-                    raise ConfigError("no floor marks: the video's camera is not known")
-                world = np.column_stack([truth["x"], truth["y"], truth["z"]])
-                t, _ = floor.on_floor(px, clicked_floor(camera, world, v.path.name), rest)
-            else:
+            if name != FLOOR_PATH:
                 t = SCALE[name](px, shape)
+            elif marks is None:
+                raise ConfigError("no floor marks: the video's camera is not known")
+            else:
+                t, _ = floor.on_floor(px, marks, rest)
         except StudyError as e:
             paths[name] = str(e)
             continue

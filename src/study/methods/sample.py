@@ -16,16 +16,13 @@ from study.core.cache import write_text_atomic
 from study.core.errors import ConfigError, check_writable
 from study.core.progress import Progress
 from study.methods.videos import throw
-from study.see import render
+from study.see import floor, render
 from study.see.camera import Camera
 from study.simulate import synth
 
 SEED = 7
 """The throws' default seed: other throws than any split the book trains or tests on (those are seeds 0-2 and their
 offsets)."""
-MARKS = np.array([[x, y] for y in (-0.4, 0.4) for x in (-1.0, 0.0, 1.0)])
-"""Where the floor points lie, metres on the floor (x along the throw, y towards the camera's side): two rows of
-three, 2 m x 0.8 m, about the throw's path."""
 COLOR = "orange"
 """The rendered object's colour (``study.see.config.COLORS``)."""
 
@@ -37,14 +34,14 @@ def render_config(seed: int = SEED) -> render.RenderConfig:
                                jpeg_quality=85, shadows=True, seed=seed)
 
 
-def floor_rows(camera: Camera, marks: np.ndarray = MARKS) -> list[tuple[float, float, float, float]]:
-    """The ``FLOOR.csv`` rows ``(u, v, x, y)`` of the floor points ``marks`` (n, 2) metres that ``camera`` sees inside
-    its image; :class:`ConfigError` when fewer than four are in view."""
-    uv = camera.project(np.column_stack([marks, np.zeros(len(marks))]))
-    inside = (uv[:, 0] >= 0) & (uv[:, 0] <= camera.width - 1) & (uv[:, 1] >= 0) & (uv[:, 1] <= camera.height - 1)
-    if inside.sum() < 4:
-        raise ConfigError(f"only {int(inside.sum())} of the floor points are in the camera's view; need four")
-    return [(float(u), float(v), float(x), float(y)) for (u, v), (x, y) in zip(uv[inside], marks[inside])]
+def floor_rows(camera: Camera, marks: np.ndarray = floor.MARKS) -> list[tuple[float, float, float, float]]:
+    """The ``FLOOR.csv`` rows ``(u, v, x, y)`` of the floor points ``marks`` (n, 2) metres (by default the study's,
+    ``study.see.floor.MARKS``, about the middle of the throws' path) that ``camera`` sees inside its image, exact;
+    :class:`ConfigError` when fewer than four are in view."""
+    marked = floor.seen(camera, marks)
+    if len(marked.points) < floor.MIN_MARKS:
+        raise ConfigError(f"only {len(marked.points)} of the floor points are in the camera's view; need four")
+    return [(float(u), float(v), float(x), float(y)) for (u, v), (x, y) in zip(marked.pixels, marked.points)]
 
 
 def write(out_dir: str | Path, per_class: int = 1, seed: int = SEED, progress: bool = True) -> list[Path]:

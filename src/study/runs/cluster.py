@@ -73,20 +73,12 @@ def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
     return _totals([record for record, _ in _planned(parts).values()])
 
 
-def plan_failures(parts: Sequence[Path]) -> list[dict[str, Any]]:
-    """Every failed run listed in the plan files ``parts``, each with why the book means it to fail, or that it
-    was not meant to (``study.runs.failures.failed_runs``)."""
-    from study.runs.failures import failed_runs
+def plan_listed(parts: Sequence[Path]) -> dict[str, list[dict[str, Any]]]:
+    """The failed runs and the runs still improving at their budget of the plan files ``parts``, in one pass over
+    their records (``study.runs.failures.listed``)."""
+    from study.runs.failures import listed
 
-    return failed_runs(_planned(parts))
-
-
-def plan_unsettled(parts: Sequence[Path]) -> list[dict[str, Any]]:
-    """Every run listed in the plan files ``parts`` that was still improving when its epoch budget ran out
-    (``study.runs.failures.unsettled_runs``)."""
-    from study.runs.failures import unsettled_runs
-
-    return unsettled_runs(_planned(parts))
+    return listed(_planned(parts))
 
 
 def plan_by_part(parts: Sequence[Path]) -> dict[str, dict[str, float]]:

@@ -1,6 +1,6 @@
 """Which runs the book means to fail, and why: a run that ends on its initial plateau is either one of these, shown
 failing on purpose, or a failure by chance that the build must show and explain. No torch needed (the builder reads
-it to list a build's failed runs in its timings, :func:`failed_runs`).
+it to list a build's failed runs in its timings, :func:`listed`, beside the runs still improving at their budget).
 """
 
 from __future__ import annotations
@@ -45,23 +45,6 @@ def reason(config: Mapping[str, Any]) -> str:
     return next((d.reason for d in DESIGNED if d.applies(config)), BY_CHANCE)
 
 
-def failed_runs(planned: Mapping[str, tuple[str, Path]]) -> list[dict[str, Any]]:
-    """Every failed run of a build's plan (model key -> (its record's path, the chapter's plan file)), each with the
-    chapter that first asked for it, what it is and :func:`reason`; a record that cannot be read is left out."""
-    out = []
-    for model, (record, part) in planned.items():
-        with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
-            rec = json.loads(Path(record).read_text())
-            if not rec.get("failed"):
-                continue
-            c = rec["config"]
-            out.append({"chapter": part.stem, "model": model, "dims": c["dims"], "length": c["length"],
-                        "cell": c["cell"], "inputs": c["inputs"], "observe": c["observe"], "seed": c["seed"],
-                        "best_epoch": rec.get("best_epoch"), "epochs_run": rec.get("epochs_run"),
-                        "reason": reason(c)})
-    return out
-
-
 SETTLE_EPOCHS = 10
 """A run that could stop early but ran its whole epoch budget with its best epoch among the last this many had not
 flattened: its validation loss was still falling when the budget ran out."""
@@ -76,22 +59,26 @@ def unsettled(record: Mapping[str, Any]) -> bool:
     return int(record["epochs_run"]) >= int(c["epochs"]) and int(record["best_epoch"]) >= int(c["epochs"]) - SETTLE_EPOCHS
 
 
-def unsettled_runs(planned: Mapping[str, tuple[str, Path]]) -> list[dict[str, Any]]:
-    """Every run of a build's plan (model key -> (its record's path, the chapter's plan file)) that had not flattened
-    (:func:`unsettled`), each with the chapter that first asked for it and what it is; unreadable records left out."""
-    out = []
+def listed(planned: Mapping[str, tuple[str, Path]]) -> dict[str, list[dict[str, Any]]]:
+    """One pass over a build's plan (model key -> (its record's path, the chapter's plan file)): ``failed_runs``,
+    every failed run with :func:`reason`, and ``unsettled_runs``, every run still improving at its budget
+    (:func:`unsettled`); each with the chapter that first asked for it and what it is. A record that cannot be read
+    is left out."""
+    out: dict[str, list[dict[str, Any]]] = {"failed_runs": [], "unsettled_runs": []}
     for model, (record, part) in planned.items():
         with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
             rec = json.loads(Path(record).read_text())
+            c = rec["config"]
+            row = {"chapter": part.stem, "model": model,
+                   **{k: c[k] for k in ("dims", "length", "cell", "inputs", "observe", "lr", "truncation", "seed")},
+                   **{k: rec.get(k) for k in ("best_epoch", "epochs_run", "val_accuracy")}}
+            if rec.get("failed"):
+                out["failed_runs"].append({**row, "reason": reason(c)})
             if unsettled(rec):
-                c = rec["config"]
-                out.append({"chapter": part.stem, "model": model, "dims": c["dims"], "length": c["length"],
-                            "cell": c["cell"], "inputs": c["inputs"], "observe": c["observe"], "lr": c["lr"],
-                            "truncation": c["truncation"], "seed": c["seed"], "best_epoch": rec["best_epoch"],
-                            "epochs": c["epochs"], "val_accuracy": rec.get("val_accuracy")})
+                out["unsettled_runs"].append(row)
     return out
 
 
 def by_chance(failed: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
-    """The runs of :func:`failed_runs` that were not designed to fail."""
+    """The failed runs of :func:`listed` that were not designed to fail."""
     return [f for f in failed if f["reason"] == BY_CHANCE]

@@ -42,6 +42,8 @@ ONE_SCALE = "one-scale"
 """The camera path of a video read by one scale per clip (``study classify`` without a floor)."""
 PATHS: tuple[str, ...] = (ONE_SCALE,)
 """The camera paths a recommended model can serve."""
+
+
 @dataclass(frozen=True)
 class PathModel:
     """The model recommended for one camera path, and what the study measured of it."""
@@ -154,4 +156,3 @@ def load(data_dir: str | Path, path: str = ONE_SCALE) -> tuple[Ensemble, Recomme
             raise ModelError(f"{Path(data_dir) / FILE} names the model folder {m}, which is gone; build the book "
                              "again, or pass --model DIR")
     return Ensemble(tuple(train.load(m) for m in rec.path(path).models)), rec
-

@@ -50,6 +50,9 @@ from study.see.trajectory import Trajectory
 
 MIN_MARKS = 4
 """Marks a homography needs; five or more are recommended (four fit any camera exactly: nothing checks them)."""
+MARKS = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])
+"""Where the study tapes its marks, metres on the floor about the throw's middle: a 2 m x 1.5 m rectangle's corners
+and the middles of its long sides (the camera sweep's floor path, ``study render``'s FLOOR.csv, the scripts)."""
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,15 @@ class Floor:
     """(k, 2) float64: x, y on the floor, metres."""
     source: str = ""
     """Where they were read from (for errors)."""
+
+
+def seen(camera: Camera, points: np.ndarray, click_px: float = 0.0, seed: int = 0, source: str = "") -> Floor:
+    """The floor ``points`` (k, 2) metres that ``camera`` sees inside its picture, with their pixels as a click gives
+    them: the camera's projection plus ``click_px`` pixels of noise (seeded by ``seed``)."""
+    px = camera.project(np.column_stack([points, np.zeros(len(points))]))
+    px = px + np.random.default_rng(seed).normal(0.0, click_px, px.shape) if click_px else px
+    inside = (px[:, 0] >= 0) & (px[:, 0] <= camera.width - 1) & (px[:, 1] >= 0) & (px[:, 1] <= camera.height - 1)
+    return Floor(px[inside], np.asarray(points, np.float64)[inside], source)
 
 
 def read_floor(path: str | Path) -> Floor:
