@@ -40,6 +40,7 @@ import numpy as np
 from scipy import stats
 
 from study.learn.config import TrainConfig
+from study.runs.failures import CLIMB, LAST, SETTLED, swing_and_climb  # the build's settle rule, the same numbers
 from study.runs import schedule
 from study.simulate import synth
 
@@ -68,15 +69,8 @@ SCREEN: dict[str, dict[str, Any]] = {"speed X, Y, Z": {"dims": "xyz", "inputs": 
 CONFIRM: dict[str, dict[str, Any]] = {"positions Z": {"dims": "z"}, "positions X, Y, Z": {"dims": "xyz"},
                                       "every frame, velocity Z": {"dims": "z", "inputs": "velocity", "loss_at": "every"}}
 """The networks the choice is confirmed on (the decision chapter's answers at every frame)."""
-SETTLED = 2.0
-"""Points: the most the validation accuracy may move over the last 10 epochs for a recipe to count as settled."""
-CLIMB = 1.0
-"""Points: the most the validation accuracy may still rise from the 10 epochs before the last 10 to the last 10
-(means) for a recipe to count as settled: a smooth curve that still climbs has not flattened."""
 NEAR = 0.5
 """Points: recipes this close to the best settled validation accuracy count as equally good; the cheapest wins."""
-LAST = 10
-"""Epochs at the end of a run over which settling is measured."""
 SMOKE_EPOCHS = 4
 """On the smoke preset every budget is cut to this (the smoke data set cannot tell recipes apart)."""
 
@@ -129,9 +123,9 @@ def measure(ds, cfgs: dict[tuple[str, str], list[TrainConfig]], data_dir: Path, 
         swing, climb = [], []
         for r in rs:
             acc = [h["val_accuracy"] for h in r["history"] if np.isfinite(h["val_accuracy"])]
-            last, before = acc[-LAST:], acc[-2 * LAST:-LAST]
-            swing.append(100 * (max(last) - min(last)) if last else float("nan"))
-            climb.append(100 * (np.mean(last) - np.mean(before)) if last and before else 0.0)
+            sc = swing_and_climb(acc) if acc else (float("nan"), 0.0)
+            swing.append(sc[0])
+            climb.append(sc[1])
         cpu = float(np.mean([r.get("cpu_seconds", r["train_seconds"]) for r in rs]))
         rows.append(Row(recipe, network, [100 * r["val_accuracy"] for r in rs], swing, climb,
                         [r["epochs_run"] for r in rs],

@@ -328,7 +328,12 @@ def test_a_failed_run_is_listed_with_the_reason_the_book_means_it_to_fail_or_as_
     assert [f["model"] for f in failed] == ["first", "long", "chance"] and {f["chapter"] for f in failed} == {"table1"}
     assert "first protocol" in failed[0]["reason"] and "Figure 4" in failed[1]["reason"]
     assert [f["model"] for f in failures.by_chance(failed)] == ["chance"]
-    assert failures.reason(dc.asdict(dc.replace(long, forget_init="chrono"))) == failures.BY_CHANCE
+    chrono = dc.asdict(dc.replace(long, forget_init="chrono", truncation=180))
+    assert failures.reason(chrono, 30.0) == failures.BY_CHANCE, "the memory spans the input: a failure is chance's"
+    assert "truncated" in failures.reason({**chrono, "truncation": 90}, 30.0), "90 of 180 frames back-propagated"
+    assert failures.reason({**chrono, "truncation": 90}) == failures.BY_CHANCE, "no frame rate recorded: cannot say"
+    assert "shortest input" in failures.reason(dc.asdict(TrainConfig(length=0.5)), 30.0)
+    assert failures.reason(dc.asdict(TrainConfig(length=3.0)), 30.0) == failures.BY_CHANCE, "Table 1's own: chance"
 
 
 def test_a_run_still_improving_when_its_epoch_budget_ran_out_is_listed_as_not_flattened(tmp_path):
@@ -337,16 +342,21 @@ def test_a_run_still_improving_when_its_epoch_budget_ran_out_is_listed_as_not_fl
     from study.learn.config import TrainConfig
     from study.runs import cluster, failures
 
-    def record(name: str, cfg: TrainConfig, best: int, ran: int) -> str:
+    def record(name: str, cfg: TrainConfig, curve: list[float]) -> str:
         path = tmp_path / f"{name}.json"
-        path.write_text(json.dumps({"config": dc.asdict(cfg), "failed": False, "best_epoch": best, "epochs_run": ran,
-                                    "val_accuracy": 0.9}))
+        history = [{"epoch": e, "val_accuracy": a} for e, a in enumerate(curve)]
+        path.write_text(json.dumps({"config": dc.asdict(cfg), "failed": False, "best_epoch": len(curve) - 1,
+                                    "epochs_run": len(curve), "val_accuracy": curve[-1], "history": history}))
         return str(path)
 
+    climbing = [0.7 + 0.002 * e for e in range(150)]  # the GRU's best point: 3 points in the last 20 epochs
+    saturated = [0.99 + 0.00005 * e for e in range(150)]  # velocity Z: its loss still falls, its accuracy is flat
+    swinging = [0.8 + 0.03 * (e % 2) for e in range(150)]
     plan = tmp_path / "table1.jsonl"
-    plan.write_text("".join(json.dumps({"model": m, "record": record(m, c, b, r)}) + "\n" for m, c, b, r in (
-        ("climbing", TrainConfig(epochs=150), 149, 150), ("flat", TrainConfig(epochs=150), 120, 150),
-        ("stopped", TrainConfig(epochs=150), 60, 81), ("cosine", TrainConfig(epochs=40, lr_schedule="cosine"), 39, 40))))
+    plan.write_text("".join(json.dumps({"model": m, "record": record(m, c, a)}) + "\n" for m, c, a in (
+        ("climbing", TrainConfig(epochs=150), climbing), ("saturated", TrainConfig(epochs=150), saturated),
+        ("swinging", TrainConfig(epochs=150), swinging), ("stopped", TrainConfig(epochs=150), climbing[:81]),
+        ("cosine", TrainConfig(epochs=150, lr_schedule="cosine"), climbing))))
     got = cluster.plan_listed([plan])["unsettled_runs"]
-    assert [u["model"] for u in got] == ["climbing"] and got[0]["chapter"] == "table1" and got[0]["best_epoch"] == 149
-    assert failures.unsettled({"config": dc.asdict(TrainConfig(epochs=150)), "best_epoch": 140, "epochs_run": 150})
+    assert [u["model"] for u in got] == ["climbing", "swinging"] and got[0]["chapter"] == "table1"
+    assert failures.swing_and_climb(climbing) == pytest.approx((1.8, 2.0))

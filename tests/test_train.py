@@ -219,7 +219,7 @@ def test_a_run_that_cannot_learn_says_it_failed(ds):
     rng = np.random.default_rng(0)
     shuffled = dataclasses.replace(ds, train=dataclasses.replace(ds.train, y=rng.permutation(ds.train.y)))
     cfg = dataclasses.replace(TINY, dims="z", epochs=3, min_epochs=0)
-    with pytest.warns(train.TrainingFailedWarning, match="failed to train.*--lr"):
+    with pytest.warns(train.TrainingFailedWarning, match=r"failed to train.*a lower lr \(the protocol"):
         tm = train.fit(shuffled, cfg, progress=False)
     assert tm.failed and "never left the initial plateau" in tm.failure()
 
@@ -299,11 +299,11 @@ def test_fit_starts_from_the_configured_forget_bias(ds):
     assert mean_forget(1.0) == pytest.approx(mean_forget(0.0) + 1.0, abs=1e-4)
 
 
-@pytest.mark.parametrize("min_epochs, expected", [(0, 1), (5, 6)])
-def test_a_run_on_the_plateau_stops_at_min_epochs_plus_patience(ds, min_epochs, expected):
-    """No weight moves, so the validation loss never leaves the plateau: the run stops once ``min_epochs +
-    patience`` epochs have passed, keeping its first epoch."""
-    cfg = dataclasses.replace(FROZEN, patience=1, min_epochs=min_epochs, epochs=10)
+@pytest.mark.parametrize("plateau_epochs, expected", [(1, 1), (6, 6)])
+def test_a_run_on_the_plateau_stops_after_its_plateau_allowance(ds, plateau_epochs, expected):
+    """No weight moves, so the validation loss never leaves the plateau: the run stops once ``plateau_epochs``
+    have passed, whatever its minimum and patience, keeping its first epoch."""
+    cfg = dataclasses.replace(FROZEN, patience=1, min_epochs=0, plateau_epochs=plateau_epochs, epochs=10)
     tm = train.fit(ds, cfg, progress=False)
     assert tm.history[0]["val_loss"] > train.PLATEAU_LOSS, "the toy's frozen run is on the plateau"
     assert len(tm.history) == expected and tm.best_epoch == 0
@@ -322,16 +322,28 @@ def _stops(ds, cfg: train.TrainConfig, val_losses: list[float]) -> int | None:
 def test_patience_counts_from_the_epoch_the_loss_leaves_the_plateau(ds):
     """The velocity-Z run of the last cold build: on the plateau for 30 epochs, a blip at epoch 6 its best. Today
     that blip cannot end it at the minimum; leaving the plateau at epoch 35, it trains on from there."""
-    cfg = dataclasses.replace(TINY, epochs=200, patience=20, min_epochs=30)
+    cfg = dataclasses.replace(TINY, epochs=200, patience=20, min_epochs=30, plateau_epochs=50)
     flat = [0.6931] * 60
     flat[6] = 0.680  # the blip: lower than any other epoch, still on the plateau (PLATEAU_LOSS is 0.624)
-    assert _stops(ds, cfg, flat) == 49, "never left: stops at min_epochs + patience, not at the minimum (29)"
+    assert _stops(ds, cfg, flat) == 49, "never left: stops after plateau_epochs, not at the minimum (29)"
     leaving = flat[:35] + [0.60 - 0.01 * k for k in range(20)] + [0.45] * 40
     assert _stops(ds, cfg, leaving) == 54 + 20, "patience from its best after leaving"
     early = [0.69, 0.5, 0.4] + [0.41] * 60
     assert _stops(ds, cfg, early) == 29, "left at once, best at 2: patience runs out at 22, the minimum holds to 29"
     late_best = [0.69, 0.5] + [0.45] * 20 + [0.40] + [0.45] * 40
     assert _stops(ds, cfg, late_best) == 22 + 20
+
+
+def test_a_slow_starter_gets_the_plateau_allowance_to_leave_the_plateau(ds):
+    """Table 1's X, Y, Z seed 0 of the cold build at 16ca2b0 left the plateau at epoch 56: the old rule (min_epochs
+    + patience = 50) cut it as a failure; the study's allowance (100) lets it train, and still ends a run that
+    never leaves."""
+    cfg = dataclasses.replace(TINY, epochs=150, patience=20, min_epochs=30)
+    assert cfg.plateau_epochs == TrainConfig().plateau_epochs == 100
+    slow = [0.69] * 56 + [0.60 - 0.01 * k for k in range(15)] + [0.46] * 80
+    assert _stops(ds, dataclasses.replace(cfg, plateau_epochs=50), slow) == 49, "the old rule: failed at 50"
+    assert _stops(ds, cfg, slow) == 70 + 20, "left at 56, best at 70: patience from there"
+    assert _stops(ds, cfg, [0.69] * 150) == 99, "never leaves: stops after the allowance"
 
 
 def test_plateau_schedule_halves_the_rate_when_validation_stalls(ds):
@@ -366,11 +378,13 @@ def test_a_diverged_run_says_so_and_keeps_finite_weights(ds, tmp_path):
 
 
 def _as_old_format(folder, version: int) -> None:
-    """Rewrite a saved model directory as format 1, 2, 3 or 5 wrote it: the budget named ``max_epochs``; before
-    format 4 none of its fields (``rotate``, ...); before format 3 the std as the state dict's 'scale' and no
-    'inputs' field (and, for format 1, none of the protocol fields)."""
+    """Rewrite a saved model directory as format 1, 2, 3, 5 or 6 wrote it: no plateau allowance; before format 6 the
+    budget named ``max_epochs``; before format 4 none of its fields (``rotate``, ...); before format 3 the std as
+    the state dict's 'scale' and no 'inputs' field (and, for format 1, none of the protocol fields)."""
     cfg = json.loads((folder / "config.json").read_text())
-    cfg["max_epochs"] = cfg.pop("epochs")
+    del cfg["plateau_epochs"]
+    if version < 6:
+        cfg["max_epochs"] = cfg.pop("epochs")
     for name in OLD_MEANING[3] if version <= 3 else ():  # what format 4 added
         del cfg[name]
     if version < 3:
@@ -386,10 +400,10 @@ def _as_old_format(folder, version: int) -> None:
     (folder / "meta.json").write_text(json.dumps({**meta, "format": f"study.model/{version}"}))
 
 
-@pytest.mark.parametrize("version", [1, 2, 3, 5])
+@pytest.mark.parametrize("version", [1, 2, 3, 5, 6])
 def test_an_old_format_model_reads_as_positions_with_its_old_meaning(tm, ds, tmp_path, version):
     folder = tm.save(tmp_path / "old")
-    assert json.loads((folder / "meta.json").read_text())["format"] == train.FORMAT == "study.model/6"
+    assert json.loads((folder / "meta.json").read_text())["format"] == train.FORMAT == "study.model/7"
     _as_old_format(folder, version)
     old = train.load(folder)
     assert old.config.inputs == "positions" and old.net.features.inputs == "positions"
@@ -398,6 +412,7 @@ def test_an_old_format_model_reads_as_positions_with_its_old_meaning(tm, ds, tmp
     if version == 1:
         assert (old.config.forget_bias, old.config.min_epochs, old.config.clip_norm) == (0.0, 0, 0.0)
     assert old.config.epochs == tm.config.epochs, "saved as max_epochs before format 6"
+    assert old.config.plateau_epochs == old.config.min_epochs + old.config.patience, "the plateau's stop before 7"
 
 
 def test_a_model_that_lacks_a_field_of_its_format_is_refused(tm, tmp_path):
@@ -556,6 +571,11 @@ def test_a_failure_verdict_fits_its_evidence():
     chance = train.TrainedModel(net, train.TrainConfig(), 30.0, n_val=400,
                                 history=[{"epoch": 0, "train_loss": 0.5, "val_loss": 0.5, "val_accuracy": 0.51}])
     assert chance.failed and "cannot be told from guessing" in chance.failure()
+    assert "another seed, a lower lr" in chance.failure() and "--seed" not in chance.failure(), "Python: the fields"
+    assert "another --seed, a lower --lr" in chance.failure("cli"), "the command line: its options"
+    assert chance.failure("none").endswith("(its loss 0.500)"), "no advice where the caller gives its own"
+    with pytest.raises(ValueError, match="advice"):
+        chance.failure("gui")
 
 
 def test_a_cosine_budget_warms_up_then_falls_to_its_floor():

@@ -238,7 +238,7 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
             tm = train.fit(ds, cfg, progress=not a.no_progress, warn=False)
             tm.save(a.out)
         if tm.failed:
-            _warn(f"{a.out}: {tm.failure()}")
+            _warn(f"{a.out}: {tm.failure('cli')}")
             per_class = int(min(np.bincount(ds.train.y, minlength=2)))
             if per_class < ENOUGH_THROWS:
                 _warn(f"{a.data} has {per_class} training throws a class; the protocol trains on the study's 3-second "

@@ -299,6 +299,8 @@ class Table1:
     """Test trajectories."""
     min_epochs: int
     patience: int
+    plateau_epochs: int
+    """Epochs a run may take to leave the initial plateau."""
     ema_decay: float
     """Decay per step of the weights' average every run keeps."""
     epochs: int
@@ -819,7 +821,7 @@ def compute(runner: Runner) -> Table1:
         ablation_table, baseline_table,
         n_params=sum(t.numel() for t in Classifier(3).parameters()), length_s=p.length,
         length_frames=round(p.length * ds.fps), n_train=len(ds.train), n_test=len(ds.test), min_epochs=p.min_epochs,
-        patience=p.patience, epochs=p.epochs, ema_decay=p.ema_decay, n_grid_seeds=len(p.grid_seeds), n_seeds=len(p.seeds),
+        patience=p.patience, plateau_epochs=p.plateau_epochs, epochs=p.epochs, ema_decay=p.ema_decay, n_grid_seeds=len(p.grid_seeds), n_seeds=len(p.seeds),
         n_data=len(p.data_seeds), first_patience=p.first_patience, first_epochs=p.first_epochs,
         grid_runs=grid_runs, lstm_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("peephole")),
         gru_lrs=", ".join(f"{x:g}" for x in p.grid_lrs("gru")), defaults_moved=paper.differs_from_defaults(g.config, p),

@@ -83,8 +83,10 @@ class TrainConfig:
     """Stop after this many epochs without a lower validation loss, counted once the loss has left the initial
     plateau (``study.learn.metrics.PLATEAU_LOSS``); the best epoch's weights are kept."""
     min_epochs: int = 30
-    """Early stopping cannot stop a run before this many epochs; a run still on the initial plateau stops after
-    ``min_epochs + patience``; ``epochs`` still ends any run."""
+    """Early stopping cannot stop a run before this many epochs; ``epochs`` still ends any run."""
+    plateau_epochs: int = 100
+    """A run whose validation loss has not left the initial plateau after this many epochs has failed to train and
+    stops there (the slowest starters the study measured left it at epochs 56-110: ``scripts/plateau_allowance.py``)."""
     forget_bias: float = 1.0
     """Added to the forget gates' biases at initialisation (TensorFlow's LSTMCell default, which the paper
     used); the GRU, which has no forget gate, ignores it."""
@@ -161,7 +163,7 @@ class TrainConfig:
                 hint = f"use {near[0]!r} (lower case)" if near else f"use one of {', '.join(map(repr, allowed))}"
                 raise ConfigError(f"TrainConfig.{name} = {value!r} is unknown; {hint}")
         check_range("TrainConfig.length (seconds)", self.length, 0, lo_open=True)
-        for name in ("hidden", "layers", "batch_size", "truncation", "epochs", "patience"):
+        for name in ("hidden", "layers", "batch_size", "truncation", "epochs", "patience", "plateau_epochs"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ConfigError(f"TrainConfig.{name} = {value!r}; it must be a whole number >= 1")
@@ -245,6 +247,14 @@ NO_RECIPE: dict[str, object] = {"warmup_epochs": 0, "lr_floor": 0.01, "average":
 
 RENAMED: dict[str, str] = {"max_epochs": "epochs"}
 """Fields saved under another name before model format 6: old name -> today's."""
+
+
+def old_plateau_epochs(fields: dict[str, object]) -> dict[str, object]:
+    """A config saved before model format 7 with the plateau's allowance it was trained with: a run still on the
+    plateau stopped at ``min_epochs + patience`` then (``plateau_epochs`` did not exist)."""
+    if "plateau_epochs" in fields or not {"min_epochs", "patience"} <= set(fields):
+        return fields
+    return {**fields, "plateau_epochs": int(fields["min_epochs"]) + int(fields["patience"])}  # type: ignore[call-overload]
 
 OLD_MEANING: dict[int, dict[str, object]] = {
     1: {"min_epochs": 0, "forget_bias": 0.0, "forget_init": "constant", "clip_norm": 0.0, "lr_schedule": "constant",

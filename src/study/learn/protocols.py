@@ -29,8 +29,10 @@ class Protocol:
     """The protocol every other experiment uses."""
 
     def fields(self, first_patience: int, first_epochs: int) -> dict[str, Any]:
-        """The config fields it changes, the first builds' early stop filled in from a preset's values."""
-        first = {"min_epochs": 0, "epochs": first_epochs, "patience": first_patience} if self.first_stop else {}
+        """The config fields it changes, the first builds' early stop filled in from a preset's values (no minimum,
+        and a run on the plateau stops after its patience)."""
+        first = ({"min_epochs": 0, "epochs": first_epochs, "patience": first_patience, "plateau_epochs": first_patience}
+                 if self.first_stop else {})
         return {**self.changes, **first}
 
 

@@ -16,9 +16,9 @@ through the last ``k`` frames at most; with ``k >= T`` it is full BPTT (``study.
 
 Early stopping (:func:`end_epoch`): a run keeps the weights of its lowest validation loss and stops ``patience``
 epochs after it, but never before ``min_epochs``, and patience starts counting only once the validation loss has
-left the initial plateau (:data:`study.learn.metrics.PLATEAU_LOSS`): a run still on it at epoch ``min_epochs +
-patience`` has failed to train and stops there, and a one-epoch blip on the plateau cannot end a run that was
-about to leave it.
+left the initial plateau (:data:`study.learn.metrics.PLATEAU_LOSS`): a run still on it after ``plateau_epochs`` has
+failed to train and stops there, a slow starter gets that long to leave it, and a one-epoch blip on the plateau
+cannot end a run that was about to leave it.
 
 Determinism: a run seeds everything from ``cfg.seed`` (the split permutation with NumPy; the weights, batch order
 and dropout masks with torch, from a generator of its own started inside a forked RNG, so the caller's RNG is left
@@ -192,7 +192,7 @@ def end_epoch(r: Run, epoch: int, val_loss: float, val_acc: float) -> None:
     """The end of ``r``'s epoch: its history, its schedule, its best weights, and whether it stops.
 
     It stops ``patience`` epochs after its best one, not before ``min_epochs``, patience counted from the epoch
-    its validation loss left the plateau; a run still on the plateau at ``min_epochs + patience`` stops there."""
+    its validation loss left the plateau; a run still on the plateau after ``plateau_epochs`` stops there."""
     r.history.append({"epoch": epoch, "train_loss": r.total / len(r.m.y_tr), "val_loss": val_loss,
                       "val_accuracy": val_acc, "lr": r.opt.param_groups[0]["lr"]})
     if r.sched is not None:
@@ -204,7 +204,7 @@ def end_epoch(r: Run, epoch: int, val_loss: float, val_acc: float) -> None:
     if not r.cfg.stops_early:
         return
     if r.left_plateau is None:
-        r.done = epoch + 1 >= r.cfg.min_epochs + r.cfg.patience
+        r.done = epoch + 1 >= r.cfg.plateau_epochs
     else:
         r.done = epoch - max(r.best_epoch, r.left_plateau) >= r.cfg.patience and epoch + 1 >= r.cfg.min_epochs
 

@@ -27,7 +27,7 @@ from study import CLASSES
 from study.core.errors import ConfigError, ModelError, output_error
 from study.core.cache import umask_mode
 from study.learn import native
-from study.learn.config import DIMS, OLD_MEANING, RENAMED, TrainConfig, select_inputs
+from study.learn.config import DIMS, OLD_MEANING, RENAMED, TrainConfig, old_plateau_epochs, select_inputs
 from study.learn.metrics import PLATEAU_LOSS, training_state
 from study.learn.model import Classifier
 
@@ -35,17 +35,18 @@ THREADS = 1
 """CPU threads used by :func:`fit` (see the module docstring)."""
 
 FORMATS = {"study.model/1": 1, "study.model/2": 2, "study.model/3": 3, "study.model/4": 4, "study.model/5": 5,
-           "study.model/6": 6}
+           "study.model/6": 6, "study.model/7": 7}
 """Every model format this code reads. Format 2 added the training fields min_epochs, forget_bias,
 forget_init, clip_norm, lr_schedule and the record of a diverged run; format 3 the input representation
 (``TrainConfig.inputs``: the classifier's first layer, with a mean and a standard deviation per channel);
 format 4 the rotation of the training throws (``TrainConfig.rotate``) and the input ``'speed'``, which a
 format-3 reader cannot build; format 5 the training recipe's warm-up, cosine budget and weight averaging
 (``TrainConfig.warmup_epochs``, ``lr_floor``, ``average``, ``ema_decay``); format 6 names the epoch budget
-``epochs`` (``max_epochs`` before, ``RENAMED``). An older directory is read with the
+``epochs`` (``max_epochs`` before, ``RENAMED``); format 7 adds the plateau's allowance
+(``TrainConfig.plateau_epochs``: ``min_epochs + patience`` before, ``old_plateau_epochs``). An older directory is read with the
 later fields' old meaning (``OLD_MEANING``): positions, divided by their standard deviation; no rotation; no
 warm-up or averaging."""
-FORMAT = "study.model/6"
+FORMAT = "study.model/7"
 FILES = ("weights.pt", "config.json", "normalisation.json", "history.json", "meta.json")
 """What a saved model directory holds."""
 
@@ -68,6 +69,14 @@ def frame_logits(net: Classifier, x: torch.Tensor) -> torch.Tensor:
     """Logits (B, T, 2) at every frame of ``x`` (B, T, D), gradients through the whole input."""
     hs, _ = net.encode(x)  # (B, T, H)
     return net.logits(hs)
+
+
+RETRY: dict[str, dict[str, str]] = {
+    "python": {"seed": "seed", "lr": "lr", "epochs": "epochs", "clip": "clip_norm=1 (TrainConfig's fields)"},
+    "cli": {"seed": "--seed", "lr": "--lr", "epochs": "--epochs", "clip": "--clip-norm 1"},
+    "none": {},
+}
+"""How :meth:`TrainedModel.failure` names the knobs of a retry, by who reads it."""
 
 
 @dataclass
@@ -112,9 +121,13 @@ class TrainedModel:
         trajectories to tell."""
         return self.training_state == "failed"
 
-    def failure(self) -> str:
+    def failure(self, advice: str = "python") -> str:
         """What went wrong and what to change, in one sentence ('' for a run that trained); for a validation part
-        too small to judge, that it is too small."""
+        too small to judge, that it is too small. ``advice`` names the knobs as the caller takes them: 'python'
+        (``TrainConfig``'s fields), 'cli' (``study train``'s options) or 'none' (no advice: the caller gives its
+        own)."""
+        if advice not in RETRY:
+            raise ValueError(f"failure: advice = {advice!r}; use one of {', '.join(RETRY)}")
         state = self.training_state
         if state == "trained":
             return ""
@@ -123,19 +136,23 @@ class TrainedModel:
         if state == "too few to tell":
             return (f"its validation part is too small to tell whether it trained: {round(acc * self.n_val)} of "
                     f"{self.n_val} right is within a coin's reach, though its loss ({loss:.3f}, a coin's "
-                    f"{math.log(2):.3f}) left the plateau; train on more data to judge it")
+                    f"{math.log(2):.3f}) left the plateau" + ("" if advice == "none" else "; train on more data to judge it"))
+        knob = RETRY[advice]
         if not math.isfinite(loss):
             return (f"the run diverged in epoch {self.diverged_epoch} (its loss stopped being finite) before it "
-                    f"learned anything; train again with a lower --lr (the protocol's is {TrainConfig().lr:g}) or "
-                    "--clip-norm 1")
+                    "learned anything" + ("" if advice == "none" else
+                                          f"; train again with a lower {knob['lr']} (the protocol's is "
+                                          f"{TrainConfig().lr:g}) or {knob['clip']}"))
         if loss >= PLATEAU_LOSS:
             why = (f"its validation loss at its best epoch ({self.best_epoch}) is {loss:.3f}, a coin's is "
                    f"{math.log(2):.3f}: it never left the initial plateau")
         else:
             why = (f"at its best epoch ({self.best_epoch}) its validation accuracy, {100 * acc:.1f} % of "
                    f"{self.n_val}, cannot be told from guessing (its loss {loss:.3f})")
-        return (f"the run failed to train: {why}. Train again with another --seed, a lower --lr (the protocol's is "
-                f"{TrainConfig().lr:g}), more --epochs, or more data")
+        if advice == "none":
+            return f"the run failed to train: {why}"
+        return (f"the run failed to train: {why}. Train again with another {knob['seed']}, a lower {knob['lr']} (the "
+                f"protocol's is {TrainConfig().lr:g}), more {knob['epochs']}, or more data")
 
     @property
     def dims(self) -> str:
@@ -288,6 +305,8 @@ def load(model_dir: str | Path) -> TrainedModel:
         fields = {RENAMED.get(k, k): v for k, v in fields.items()}
     if version in OLD_MEANING and isinstance(fields, dict):
         fields = {**OLD_MEANING[version], **fields}  # trained before these fields existed: what it was trained with
+    if version < 7 and isinstance(fields, dict):
+        fields = old_plateau_epochs(fields)
     missing = {f.name for f in dataclasses.fields(TrainConfig)} - set(fields if isinstance(fields, dict) else ())
     if missing:  # never fill a saved model's training with today's defaults
         raise ModelError(f"model file {d / 'config.json'} lacks {', '.join(sorted(missing))}; {hint}")

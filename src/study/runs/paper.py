@@ -48,7 +48,7 @@ GRID_FIELDS = ("cell", "inputs", "lr", "truncation", "dropout", "batch_size")
 
 def grid_configs(p: Preset, cell: Cell = "peephole", inputs: Inputs = "positions") -> list[TrainConfig]:
     """Every point of the preset's grid for ``cell`` reading ``inputs``, once per grid seed."""
-    base = dataclasses.replace(p.base_config(), cell=cell, inputs=inputs)
+    base = dataclasses.replace(p.cell_config(cell), inputs=inputs)
     return [dataclasses.replace(base, lr=lr, truncation=k, dropout=d, batch_size=b, seed=s)
             for lr, k, d, b in itertools.product(p.grid_lrs(cell), p.truncations, p.dropouts, p.batch_sizes)
             for s in p.grid_seeds]

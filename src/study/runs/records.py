@@ -30,9 +30,10 @@ from study.learn import native, stack, train
 from study.learn.train import TrainConfig
 from study.simulate.data import Dataset
 
-RUN_FORMAT = "study.run/3"
+RUN_FORMAT = "study.run/4"
 """Format 2 added the test split's per-trajectory probabilities, the diverged epoch and the failed flag; format 3
-what the validation part says of the run (``training``: trained, failed, or too few to tell) and the device."""
+what the validation part says of the run (``training``: trained, failed, or too few to tell) and the device; format 4
+the data's frame rate (``fps``: with the config's length and truncation, whether back-propagation was truncated)."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -141,7 +142,7 @@ def _record(dataset: Dataset, cfg: TrainConfig, test: bool, tm: train.TrainedMod
         tm.save(model_dir(dataset, cfg, data_dir, device))  # so a chapter that needs this very model loads it
     best = tm.history[tm.best_epoch]
     record = {
-        "key": key, "format": RUN_FORMAT, "data_key": dataset.key, "config": dataclasses.asdict(cfg),
+        "key": key, "format": RUN_FORMAT, "data_key": dataset.key, "fps": dataset.fps, "config": dataclasses.asdict(cfg),
         "device": device_name(device), "val_accuracy": tm.val_accuracy, "val_loss": best["val_loss"],
         "n_val": tm.n_val, "training": tm.training_state, "failed": tm.failed, "diverged_epoch": tm.diverged_epoch,
         "best_epoch": tm.best_epoch, "epochs_run": len(tm.history), "history": tm.history,
