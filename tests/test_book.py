@@ -425,8 +425,11 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
 
     rec = recommended.read(tmp_path / "data")  # the model `study classify` uses without --model
     assert rec.preset == "smoke" and rec.key and all(m.is_dir() for m in rec.path().models)
-    chosen = measured.kind(recommended.load(tmp_path / "data")[0].members[0].config)
+    chosen = measured.candidate_kind(rec.path().name)
     assert set(rec.path().accuracy) >= {"exact", "mean"} and rec.path().accuracy == rec.measured[chosen]
+    assert set(rec.paths) == set(recommended.PATHS), "a model for one scale and one for the floor path"
+    floor = rec.path(recommended.FLOOR)
+    assert floor.accuracy == rec.measured[measured.candidate_kind(floor.name)] and "floor" in floor.accuracy
     assert rec.path().band == (0.0, 1.0), "8 throws a class certify no side: every answer is 'cannot tell'"
     assert not again["table1"]["cached"] and "waited" not in again["table1"]
     index = tmp_path / "_build" / "html" / "book" / "intro.html"

@@ -43,7 +43,7 @@ def test_a_protocol_changes_what_its_record_says_and_the_study_protocol_changes_
 
 def test_the_families_the_sweep_films_are_the_ones_the_results_name_and_any_camera_spans():
     assert list(sweep.FAMILIES) == [f.key for f in observe.CAMERA_FAMILIES]
-    assert typing.get_args(usercamera.Group) == ("all", *sweep.FAMILIES)
+    assert typing.get_args(usercamera.Family) == ("all", *sweep.FAMILIES)
     r = observe.AnyCameraRanges()
     for f in observe.CAMERA_FAMILIES:
         assert r.height[0] <= f.height[0] and f.height[1] <= r.height[1], f.key

@@ -273,26 +273,39 @@ def test_a_worker_that_computes_another_key_refuses(tmp_path, ds):
     assert not (tmp_path / "runs").exists(), "it writes nothing"
 
 
-@pytest.mark.slow  # trains twelve tiny models
+@pytest.mark.slow  # trains twenty tiny models
 def test_the_recommended_model_is_the_best_candidate_on_observed_validation_throws(tmp_path):
     from study.methods import recommend
+    from study.runs import measured
     from study.simulate import observe
 
     toy = model_toys.dataset(n=40, T=20)
     r = runner(toy, TINY, tmp_path)
     cfg = dataclasses.replace(TINY.base_config(), truncation=5, batch_size=8)
     ob = observe.Observation(noise=0.01, drop=0.1)
-    cands = recommend.candidates(r, {"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}, ob)
-    assert list(cands) == [f"{i}, {t}" for i in ("positions", "velocity") for t in ("exact", "randomised", "any-camera")]
+    floor = observe.Observation(noise=0.03, drop=0.05)  # the floor path's error, as its fit would give it
+    cfgs = {"positions": cfg, "velocity": dataclasses.replace(cfg, inputs="velocity")}
+    assert list(recommend.candidates(r, cfgs, ob)) == [f"{i}, {t}" for i in ("positions", "velocity")
+                                                       for t in ("exact", "randomised", "any-camera")]
+    cands = recommend.candidates(r, cfgs, ob, floor)
+    assert list(cands) == [f"{i}, {t}" for i in ("positions", "velocity")
+                           for t in ("exact", "randomised", "any-camera", "floor", "floor-fixed")]
     assert cands["velocity, randomised"].observe == "randomised" and cands["velocity, randomised"].observe_noise == 0.01
     assert cands["velocity, any-camera"] == dataclasses.replace(cands["velocity, randomised"], observe="any-camera")
-    rec = recommend.recommended(r, cands, seeds=(0, 1), ob=ob)
+    assert cands["positions, floor"].observe == "randomised" and cands["positions, floor"].observe_noise == 0.03
+    assert cands["positions, floor-fixed"] == dataclasses.replace(cands["positions, floor"], observe="fixed")
+    assert all(recommend.kind(n) == measured.kind(c) for n, c in cands.items() if not n.endswith("floor"))
+    assert recommend.kind("positions, floor") == "positions-floor", "named apart from the calibrated randomised kind"
+    rec = recommend.recommended(r, cands, seeds=(0, 1), ob=ob, floor=floor)
     choice, val, user, models = rec.choice, rec.val, rec.val_user, rec.models
-    assert set(val) == set(user) == set(models) == set(cands) and choice == max(user, key=lambda k: user[k].value)
+    assert set(val) == set(user) == set(rec.val_floor) == set(models) == set(cands)
+    assert choice == max(user, key=lambda k: user[k].value)
+    assert rec.floor_choice == max(rec.val_floor, key=lambda k: rec.val_floor[k].value)
     assert val != user, "scored through the calibrated tracker and as a user's camera gives the throws"
     assert rec.model is models[choice]
     assert [m.config for m in models[choice].members] == [dataclasses.replace(cands[choice], seed=s) for s in (0, 1)]
-    assert r.plan.n_models == 12 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
+    assert r.plan.n_models == 20 and all(0 <= v.lo <= v.value <= v.hi <= 1 for v in val.values())
+    assert recommend.recommended(r, cands, seeds=(0,), ob=ob).floor_choice is None, "no floor path: no floor model"
     with pytest.raises(ConfigError, match="seeds is empty"):
         recommend.recommended(r, cands, seeds=(), ob=ob)
 

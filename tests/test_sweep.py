@@ -78,7 +78,8 @@ def test_the_camera_cost_scores_every_path_on_the_same_clips(smoke):
     tracked = camera_cost.track_clips(clips, shape, progress=False)
     got = camera_cost.measure([_Says(False), _Says(True)], clips, tracked)
     res = got.results
-    assert list(res) == ["all", *sweep.FAMILIES]
+    heights = sorted({c.shot.height_px for c in clips})
+    assert list(res) == ["all", *sweep.FAMILIES, *(f"{h}p" for h in heights)], "pooled, by family, by resolution"
     exact = res["all"]["exact"]
     assert exact.accuracy.value == 0.5 and exact.cost is None and exact.rms_mm == 0  # one seed right on each clip
     for name in camera_cost.PATHS:

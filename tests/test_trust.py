@@ -101,3 +101,36 @@ def test_classify_help_quotes_the_shipped_measurements_or_says_there_are_none(tm
     said = help_text()
     assert "On the paper build of abc1234, 80 clips from random cameras" in said
     assert "labelled 52.5-64.2 % of the throws right through one scale, an unmeasured share through floor" in said
+
+
+def test_with_floor_marks_the_recommended_floor_model_answers_with_its_own_band_and_kind(tmp_path):
+    """A build that recommends a model for each path: floor marks pick the floor path's (its band, its kind named
+    by what it was chosen for), none pick the one-scale one; a build with no floor model answers with its one-scale
+    model and says so."""
+    import dataclasses
+
+    import model_toys
+
+    from study import answer
+    from study.learn import train
+
+    ds = model_toys.dataset(n=16, T=20)
+    cfg = train.TrainConfig(dims="z", length=0.5, hidden=4, epochs=1, batch_size=8, truncation=5)
+    one, fl = (train.fit(ds, dataclasses.replace(cfg, seed=s), progress=False, warn=False).save(tmp_path / f"m{s}")
+               for s in (0, 1))
+    paths = {recommended.ONE_SCALE: recommended.PathModel("positions, any-camera", (one,), IV, band=(0.4, 0.6)),
+             recommended.FLOOR: recommended.PathModel("positions, floor", (fl,), IV, band=(0.45, 0.55))}
+    recommended.save(tmp_path, "smoke", paths, "k", {"positions-floor": {trust.FLOOR: IV}})
+    got = answer._model(None, tmp_path, floor=True)
+    assert got.recommended_for == recommended.FLOOR and got.kind == "positions-floor"
+    assert got.model.members[0].config.seed == 1, "the floor path's model folder"
+    assert got.band_for(trust.FLOOR) == (0.45, 0.55) and got.band_for("mean") is None, "its band on its own path only"
+    assert trust.for_answer(got.kind, trust.FLOOR, got.seen, got.band_for(trust.FLOOR)).accuracy == IV
+    plain = answer._model(None, tmp_path)
+    assert plain.recommended_for == recommended.ONE_SCALE and plain.band_for("mean") == (0.4, 0.6)
+    assert plain.band_for(trust.FLOOR) is None and plain.kind == "positions-any-camera"
+    assert plain.model.members[0].config.seed == 0
+    recommended.save(tmp_path, "smoke", {recommended.ONE_SCALE: paths[recommended.ONE_SCALE]}, "k", {})
+    fallback = answer._model(None, tmp_path, floor=True)
+    assert fallback.recommended_for == recommended.ONE_SCALE and "recommends none for the floor path" in fallback.which
+    assert fallback.band_for(trust.FLOOR) is None, "a one-scale band says nothing of floor heights"

@@ -22,8 +22,9 @@ def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> u
     """A camera sweep of two families made up here: exact 0.8 everywhere; every path but gravity (the default among
     them) 0.6, 0.7 on 'low' and 0.5 on 'high'; 'gravity' ``best_path_gain`` above it; 10 clips a family."""
     fams = ("low", "high")
-    clips = tuple(SimpleNamespace(shot=SimpleNamespace(family=f, distance=4.0)) for f in fams for _ in range(10))
-    per = {"all": 0.6, "low": 0.7, "high": 0.5}
+    clips = tuple(SimpleNamespace(shot=SimpleNamespace(family=f, distance=4.0, height_px=480 if i < 7 else 720))
+                  for f in fams for i in range(10))
+    per = {"all": 0.6, "low": 0.7, "high": 0.5, "480p": 0.6, "720p": 0.6}
     res = {}
     for g, acc in per.items():
         rows = {"exact": camera_cost.PathResult(_iv(0.8), None, 0.0, 0.0, 0)}
@@ -34,7 +35,7 @@ def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> u
     correct = {k: np.zeros((3, len(clips)), bool) for k in ("exact", *camera_cost.PATHS)}
     correct["mean silhouette"][:, :12] = True  # 60 %
     correct["gravity"][:, : 12 + round(20 * best_path_gain)] = True
-    m = camera_cost.Measured(res, correct, tuple(c.shot.family for c in clips))
+    m = camera_cost.Measured(res, correct, tuple(camera_cost.groups_of(c) for c in clips))
     floors = {g: camera_cost.Floor(0.06, 0.062, 10) for g in per}
     drag = {"exact": _iv(0.75), **{k: _iv(0.5, 0.4, 0.6) for k in camera_cost.PATHS}}
     if drag_rest is not None:
@@ -59,6 +60,8 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
             "usercamera.sweep.kind.velocity-randomised.exact"} <= set(names)
     assert "usercamera.sweep.all.exact.cost" not in names, "the exact path has no cost"
     assert n.sweep.groups["low"].clips.value == 10 and n.sweep.groups["all"].clips.value == 20
+    assert n.sweep.groups["480p"].clips.value == 14 and "usercamera.sweep.720p.floor.accuracy" in names, "by resolution"
+    assert "most from the high cameras" in _result(cs).sweep_words, "the worst of the families, not of the resolutions"
     f = tmp_path / "results.json"
     f.write_text(results.dumps(n.entries()))
     assert usercamera.Numbers.read(results.load(f)) == n
@@ -67,6 +70,8 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     assert "interval that holds 0" in r.default_words and "the default stays" in r.default_words
     assert r.floor_marks_words.startswith("with 6 marks taped around the throw, the heights are")
     assert "usercamera.sweep.all.floor.accuracy" in names and "usercamera.sweep.kind.velocity-exact.floor" in names
+    assert r.floor_marks_words.endswith("no model was trained for the floor path (its error model could not be fitted)")
+    assert r.floor_model_words.startswith("the floor path gave no heights on the development clips")
     assert "does not survive" in r.drag_words and "mean silhouette path" in r.drag_words
     assert r.depth_words == "7.5 % of the median camera distance, 4.0 m, is 30 cm of depth"
     assert "the tracker is not what limits" in r.floor_words
@@ -105,3 +110,27 @@ def test_the_shipped_copy_is_written_from_a_paper_builds_sweep_and_refused_from_
     (tmp_path / "smoke.json").write_text(results.dumps(n.entries(), preset="smoke"))
     with pytest.raises(SystemExit, match="'smoke' build"):
         script.shipped(tmp_path / "smoke.json", "abc1234")
+
+
+def test_the_floor_paths_model_is_reported_through_its_path_with_its_error_models_fit():
+    """The sweep with a model recommended for the floor path and the floor path's fitted error: the sentence quotes
+    that model through the floor path beside its exact heights, and says whether an AR(1) holds the path's error."""
+    import dataclasses
+
+    from study.methods import floor_model, tracker_model
+    from study.simulate.observe import TrackerNoise
+
+    cs = _sweep()
+    fit = tracker_model.TrackerFit(TrackerNoise(flight=0.068, contact=0.0075, offset=0.009, rho=0.96), 0.02, {}, 18,
+                                   2288, 100, 0.014, 0.05, -0.02, 0.96, "the floor path on 18 development clips")
+    loose = floor_model.Check((1, 2, 5, 10, 20), (0.93, 0.84, 0.58, 0.26, 0.03), (0.96, 0.92, 0.82, 0.66, 0.44))
+    cs = dataclasses.replace(cs, floor_choice="velocity, exact", floor_fit=floor_model.FloorFit(fit, loose))
+    r = _result(cs)
+    assert "the model trained for the floor path's error (velocity, exact" in r.floor_marks_words
+    assert "labels 60.0 % [55.0, 65.0] through it, +20.0 points [+15.0, +25.0] below its own 80.0 %" in r.floor_marks_words
+    words = r.floor_model_words
+    assert words.startswith("fitted on the floor path on 18 development clips: a per-throw offset of 9 mm and 68 mm")
+    assert "which it does not hold: the path's error is 0.26 correlated 10 frames on, the model's 0.66" in words
+    tight = floor_model.Check((1, 2, 5, 10, 20), (0.96, 0.92, 0.82, 0.66, 0.44), (0.96, 0.92, 0.8, 0.64, 0.41))
+    held = _result(dataclasses.replace(cs, floor_fit=floor_model.FloorFit(fit, tight))).floor_model_words
+    assert held.endswith("which holds at every lag from 1 to 20 frames (within 0.03)")

@@ -26,7 +26,7 @@ from study.see.config import TrackConfig
 from study.see.floor import Floor, on_floor, read_floor
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
-from study.trust import CANNOT_TELL, Measurements, Trust, exact_warning, for_answer, measurements, path_of
+from study.trust import CANNOT_TELL, FLOOR, Measurements, Trust, exact_warning, for_answer, measurements, path_of
 
 TENNIS_BALL = ObjectShape("sphere", (0.067,))
 """A tennis ball, 6.7 cm across."""
@@ -110,21 +110,42 @@ class _Model:
     model: TrainedModel | Ensemble
     which: str
     band: tuple[float, float] | None
-    """The recommended model's band on the one-scale paths (None: no band, or not the recommended model)."""
+    """The recommended model's band on the path it was recommended for (None: no band, or not the recommended
+    model)."""
     seen: Measurements
+    recommended_for: str | None = None
+    """The camera path the build recommended it for (``recommended.PATHS``; None: not the recommended model)."""
+    candidate: str | None = None
+    """Its name among the build's candidates (None: not the recommended model)."""
 
     @property
     def kind(self) -> str:
+        if self.candidate is not None:
+            return measured.candidate_kind(self.candidate)
         m = self.model.members[0] if isinstance(self.model, Ensemble) else self.model
         return measured.kind(m.config)
 
+    def band_for(self, route: str) -> tuple[float, float] | None:
+        """Its cannot-tell band where the answer's heights came by the path it was recommended for (``route``:
+        ``trust.path_of``), else None."""
+        if self.recommended_for == recommended.FLOOR:
+            return self.band if route == FLOOR else None
+        return self.band if self.recommended_for is not None and route in SCALE_FROM else None
 
-def _model(model: str | Path | TrainedModel | Ensemble | None, data_dir: str | Path | None) -> _Model:
+
+def _model(model: str | Path | TrainedModel | Ensemble | None, data_dir: str | Path | None,
+           floor: bool = False) -> _Model:
+    """The model that answers: ``model``, or the recommended one for the floor path (``floor``) or the one-scale
+    path (a build that recommends none for the floor path answers with its one-scale model, and says so)."""
     from study.core import datadir
 
     if model is None:
-        ensemble, rec = recommended.load(datadir.resolve(data_dir))
-        return _Model(ensemble, rec.describe(), rec.path().band, measurements(rec))
+        rec = recommended.read(datadir.resolve(data_dir))
+        path = recommended.FLOOR if floor and recommended.FLOOR in rec.paths else recommended.ONE_SCALE
+        ensemble, rec = recommended.load(datadir.resolve(data_dir), path)
+        which = rec.describe(path) + (" for one scale: this build recommends none for the floor path"
+                                      if floor and path != recommended.FLOOR else "")
+        return _Model(ensemble, which, rec.path(path).band, measurements(rec), path, rec.path(path).name)
     m = model if isinstance(model, (TrainedModel, Ensemble)) else load_model(model)
     rec = None
     with contextlib.suppress(ModelError):  # only for what its build measured of models of this kind
@@ -159,8 +180,8 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
     shape_ = None if metres_per_pixel is not None and isinstance(object_shape, _ByColour) else \
         object_for(object_shape, track_config)  # before the model: the input's problems first
     marks = read_floor(floor) if isinstance(floor, (str, Path)) else floor
-    return _answer(source, _model(model, data_dir), track_config, shape_, scale_from, metres_per_pixel, rest_height,
-                   marks)
+    return _answer(source, _model(model, data_dir, marks is not None), track_config, shape_, scale_from,
+                   metres_per_pixel, rest_height, marks)
 
 
 def in_metres(traj: Trajectory, object_shape: ObjectShape | None, scale_from: str = DEFAULT,
@@ -204,7 +225,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
     x = track.to_model_input(traj, m.fps, m.n_frames, rest_height=rest)
     p_heavy = float(m.predict_proba(x[None])[0, 1])
     route = path_of(floor is not None, scale_from, metres_per_pixel)  # how the heights were had
-    trust = for_answer(got.kind, route, got.seen, got.band if route in SCALE_FROM else None)
+    trust = for_answer(got.kind, route, got.seen, got.band_for(route))
     piece = traj.longest()
     members = m.members if isinstance(m, Ensemble) else (m,)
     assumed = (f"{how}; read {piece.t[-1] - piece.t[0]:.2f} s, {int(traj.measured.sum())} of {len(traj.t)} frames "
@@ -289,7 +310,7 @@ def classify_manifest(manifest: str | Path, model: str | Path | TrainedModel | E
 
     videos = read_manifest(manifest_folder(manifest, what), color=color, object_size=object_size)  # before the model
     marks = read_floor(floor) if isinstance(floor, (str, Path)) else floor
-    got = _model(model, data_dir)
+    got = _model(model, data_dir, marks is not None)
     out = []
     for v in videos:
         try:

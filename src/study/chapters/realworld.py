@@ -446,7 +446,9 @@ def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
         inputs, training = name.split(", ")  # "positions, exact" (candidates)
         out.setdefault(inputs, {})[training] = Candidate(
             number(iv, f"validation accuracy under the calibrated observation, {name}"),
-            number(rec.val_user[name], f"validation accuracy as a user's camera gives the throws, {name}"))
+            number(rec.val_user[name], f"validation accuracy as a user's camera gives the throws, {name}"),
+            number(rec.val_floor[name], f"validation accuracy as the floor path gives the throws, {name}")
+            if name in rec.val_floor else None)
     return out  # type: ignore[return-value]
 
 
@@ -455,10 +457,13 @@ def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
 
 
 def _val_table(rec: Recommendation) -> Table:
-    rows = [{"model": n, "val": pct_ci(iv), "user": pct_ci(rec.val_user[n]), "chosen": "✓" if n == rec.choice else ""}
+    floor = {"floor": "validation, the floor path (chooses its model) [95 % CI]"} if rec.val_floor else {}
+    rows = [{"model": n, "val": pct_ci(iv), "user": pct_ci(rec.val_user[n]),
+             **({"floor": pct_ci(rec.val_floor[n])} if floor else {}),
+             "chosen": ("✓" if n == rec.choice else "") + (" ✓ floor" if n == rec.floor_choice else "")}
             for n, iv in rec.val.items()]
     return Table(rows, {"model": "candidate (Z)", "val": "validation, calibrated tracker [95 % CI]",
-                        "user": "validation, a user's camera (chooses) [95 % CI]", "chosen": "chosen"})
+                        "user": "validation, a user's camera (chooses) [95 % CI]", **floor, "chosen": "chosen"})
 
 
 def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered: int,

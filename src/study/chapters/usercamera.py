@@ -12,6 +12,7 @@ too. :func:`compute` returns :class:`UserCamera`; :class:`Numbers` is what it re
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -20,12 +21,13 @@ import numpy as np
 
 from study.learn import train
 from study.learn.metrics import Interval
-from study.methods import camera_cost, sweep
-from study.methods.recommend import Recommendation, recommend
+from study.core.errors import StudyError
+from study.methods import camera_cost, floor_model, sweep
+from study.methods.floor_model import FloorFit
+from study.methods.recommend import Recommendation, kind, recommend
 from study.report.reported import count, number
 from study.report.text import Table, pct, pct_ci, points
 from study.report.usercamera import Numbers, PathKey, Sweep, SweepGroup, SweepPath
-from study.runs.measured import kind
 from study.see import floor, paths
 from study.simulate import measure
 from study.simulate.observe import CAMERA_FAMILIES
@@ -52,7 +54,7 @@ class CameraSweep:
     choice: str
     """The recommended candidate's name."""
     kinds: dict[str, str]
-    """Candidate name -> its kind (``study.runs.measured.kind``)."""
+    """Candidate name -> its kind (``study.methods.recommend.kind``)."""
     floors: dict[str, camera_cost.Floor]
     """Group -> the one-scale floor (true and tracked image rows)."""
     drag: dict[str, Interval]
@@ -61,14 +63,18 @@ class CameraSweep:
     """Median relative error of one frame's blob diameter (:func:`study.methods.camera_cost.size_error`)."""
     render_s: tuple[float, float, int]
     """CPU seconds and wall seconds the clips took to render, and how many clips' times were recorded."""
+    floor_choice: str | None = None
+    """The candidate recommended for the floor path (None: the floor path had no error model to train one for)."""
+    floor_fit: FloorFit | None = None
+    """The floor path's error model and its check (``study.methods.floor_model``; None: it could not be fitted)."""
 
     @property
     def recommended(self) -> camera_cost.Measured:
         return self.measured[self.choice]
 
     def clips_in(self, group: str) -> int:
-        """Clips in ``group`` ('all' or a camera family)."""
-        return sum(group in ("all", c.shot.family) for c in self.clips)
+        """Clips in ``group`` ('all', a camera family or a frame height: ``camera_cost.groups_of``)."""
+        return sum(group in camera_cost.groups_of(c) for c in self.clips)
 
 
 def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) -> CameraSweep:
@@ -98,9 +104,13 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
     drag = camera_cost.drag_rule(f_train, ds.train.y, clips, read(first)[0], fps, contact)
     times = sweep.render_times(clips)
     cpu, wall = (sum(t[k] for t in times.values()) for k in ("cpu_s", "wall_s"))
-    kinds = {name: kind(rec.configs[name]) for name in rec.models}
+    kinds = {name: kind(name) for name in rec.models}
+    fitted = None
+    with contextlib.suppress(StudyError):  # no floor heights on the development clips: said on the page
+        fitted = floor_model.fit(runner, progress)
     return CameraSweep(tuple(clips), measured, rec.choice, kinds, camera_cost.floors(clips, tracked), drag,
-                       camera_cost.size_error(clips, tracked, shape), (cpu, wall, len(times)))
+                       camera_cost.size_error(clips, tracked, shape), (cpu, wall, len(times)), rec.floor_choice,
+                       fitted)
 
 
 def _sweep_numbers(cs: CameraSweep) -> Sweep:
@@ -162,10 +172,12 @@ def _candidates_sweep_table(cs: CameraSweep) -> Table:
     for name, m in cs.measured.items():
         r = m.results["all"]
         best = max(camera_cost.PATHS, key=lambda k: r[k].accuracy.value)
-        rows.append({"model": name + (" ✓" if name == cs.choice else ""), "exact": pct_ci(r["exact"].accuracy),
+        mark = " ✓" if name == cs.choice else ""
+        mark += " ✓ floor" if name == cs.floor_choice else ""
+        rows.append({"model": name + mark, "exact": pct_ci(r["exact"].accuracy),
                      "user": pct_ci(r[default].accuracy), "cost": points(r[default].cost),
                      "best": f"{best}: {pct(r[best].accuracy.value)}"})
-    return Table(rows, {"model": "candidate (✓ recommended)", "exact": "exact heights [95 % CI]",
+    return Table(rows, {"model": "candidate (✓ recommended; ✓ floor: for the floor path)", "exact": "exact heights [95 % CI]",
                         "user": f"user's default path ({default}) [95 % CI]", "cost": "camera's cost, points [95 % CI]",
                         "best": "best path"})
 
@@ -219,7 +231,8 @@ class UserCamera:
         the default path, pooled, and the family where the camera costs most."""
         res = self.camera.recommended.results
         default = camera_cost.DEFAULT_PATH
-        worst = max((g for g in res if g != "all"), key=lambda g: res[g][default].cost.value)
+        families = {f.key for f in CAMERA_FAMILIES}
+        worst = max((g for g in res if g in families), key=lambda g: res[g][default].cost.value)
         a = res["all"]
         return (f"On {len(self.camera.clips)} clips from cameras the study never saw, the recommended model labels "
                 f"{pct_ci(a['exact'].accuracy)} of the throws right from their exact heights and "
@@ -242,14 +255,39 @@ class UserCamera:
 
     @property
     def floor_marks_words(self) -> str:
-        """What marks on the floor give: the floor path's height error and the recommended model's accuracy through
-        it, beside the default one-scale path's and the exact heights'."""
+        """What marks on the floor give: the floor path's height error and the accuracy through it of the model
+        recommended for it (else the one-scale model's), beside the default one-scale path's and the exact
+        heights'."""
         res = self.camera.recommended.results["all"]
         fl, default = res[camera_cost.FLOOR_PATH], res[camera_cost.DEFAULT_PATH]
         mm = "no heights" if math.isnan(fl.rms_centred_mm) else f"{fl.rms_centred_mm:.0f} mm off"
-        return (f"with {len(floor.MARKS)} marks taped around the throw, the heights are {mm} (one "
-                f"scale: {default.rms_centred_mm:.0f} mm) and the recommended model labels {pct_ci(fl.accuracy)} "
-                f"right ({pct_ci(default.accuracy)} with one scale)")
+        words = (f"with {len(floor.MARKS)} marks taped around the throw, the heights are {mm} (one "
+                 f"scale: {default.rms_centred_mm:.0f} mm) and the recommended model labels {pct_ci(fl.accuracy)} "
+                 f"right ({pct_ci(default.accuracy)} with one scale)")
+        name = self.camera.floor_choice
+        if name is None:
+            return words + "; no model was trained for the floor path (its error model could not be fitted)"
+        m = self.camera.measured[name].results["all"]
+        return (words + f"; the model trained for the floor path's error ({name}, chosen on validation throws as "
+                f"that path gives them) labels {pct_ci(m[camera_cost.FLOOR_PATH].accuracy)} through it, "
+                f"{points(m[camera_cost.FLOOR_PATH].cost)} below its own {pct_ci(m['exact'].accuracy)} from the exact "
+                "heights")
+
+    @property
+    def floor_model_words(self) -> str:
+        """The floor path's fitted error model in words, and how far its autocorrelation is the path's own."""
+        f = self.camera.floor_fit
+        if f is None:
+            return "the floor path gave no heights on the development clips, so no error model was fitted"
+        m, c = f.fit.model, f.check
+        k = c.lags.index(10) if 10 in c.lags else len(c.lags) - 1
+        fits = (f"which holds at every lag from {c.lags[0]} to {c.lags[-1]} frames (within {c.worst:.2f})"
+                if c.worst <= floor_model.FITS else
+                f"which it does not hold: the path's error is {c.measured[k]:.2f} correlated {c.lags[k]} frames "
+                f"on, the model's {c.model[k]:.2f} (smooth over a few frames, it forgets within a flight)")
+        return (f"fitted on {f.fit.fitted_on}: a per-throw offset of {1000 * m.offset:.0f} mm and "
+                f"{1000 * m.flight:.0f} mm in flight ({1000 * m.contact:.0f} mm in contact), correlated "
+                f"{m.rho:.2f} from frame to frame as an AR(1), {fits}")
 
     @property
     def default_words(self) -> str:

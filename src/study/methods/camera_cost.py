@@ -187,8 +187,18 @@ class Floor:
     """Clips tracked."""
 
 
+def resolution(clip: Clip) -> str:
+    """A clip's frame height as a group's name: ``"480p"``, ``"720p"``."""
+    return f"{clip.shot.height_px}p"
+
+
+def groups_of(clip: Clip) -> tuple[str, str, str]:
+    """The groups a clip's results are pooled in: 'all', its camera family and its :func:`resolution`."""
+    return ("all", clip.shot.family, resolution(clip))
+
+
 def floors(clips: Sequence[Clip], tracked: Sequence[Heights]) -> dict[str, Floor]:
-    """:class:`Floor` for every clip tracked ('all' and each family, as :func:`measure`), from each clip's
+    """:class:`Floor` for every clip tracked (each group of :func:`groups_of`, as :func:`measure`), from each clip's
     :func:`heights` (``tracked``, in the order of ``clips``: the tracking :func:`measure` already did)."""
     rows: dict[str, list[tuple[float, float]]] = {"all": []}
     for clip, h in zip(clips, tracked, strict=True):
@@ -197,8 +207,8 @@ def floors(clips: Sequence[Clip], tracked: Sequence[Heights]) -> dict[str, Floor
         t = next(iter(h.tracks.values()))
         n = min(len(t.v), len(h.exact))
         pair = (one_scale_floor(clip), line_rms(np.where(t.status[:n] > 0, t.v[:n], np.nan), h.exact[:n]))
-        rows["all"].append(pair)
-        rows.setdefault(clip.shot.family, []).append(pair)
+        for g in groups_of(clip):
+            rows.setdefault(g, []).append(pair)
     return {g: Floor(*np.sqrt(np.mean(np.square(r), axis=0)).tolist(), len(r)) for g, r in rows.items()}
 
 
@@ -274,15 +284,16 @@ class Measured:
     """One model (the seeds of one configuration) on the sweep, by every path."""
 
     results: dict[str, dict[str, PathResult]]
-    """Group ('all' and each family) -> path ('exact' and :data:`PATHS`) -> :class:`PathResult`."""
+    """Group ('all', each family, each resolution: :func:`groups_of`) -> path ('exact' and :data:`PATHS`) ->
+    :class:`PathResult`."""
     correct: dict[str, np.ndarray]
     """Path -> (seeds, clips) bool: which seed labelled which clip right."""
-    families: tuple[str, ...]
-    """Each clip's camera family, in order."""
+    groups: tuple[tuple[str, ...], ...]
+    """Each clip's groups (:func:`groups_of`), in order."""
 
     def difference(self, a: str, b: str, group: str = "all") -> Interval:
         """Path ``a``'s accuracy minus path ``b``'s on ``group``'s clips, paired over clips and seeds."""
-        sel = np.array([group in ("all", f) for f in self.families])
+        sel = np.array([group in gs for gs in self.groups])
         return bootstrap_difference(self.correct[a][:, sel], self.correct[b][:, sel])
 
 
@@ -296,10 +307,11 @@ def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]
     y = np.array([c.video.label == "heavy" for c in clips])
     correct = {k: correct_of(members, xk, y) & ~missing[k] for k, xk in x.items()}
     errors = {"exact": [np.zeros(1)] * len(clips), **{k: [_errors(h, k) for h in tracked] for k in PATHS}}
-    fams = tuple(c.shot.family for c in clips)
+    groups = tuple(groups_of(c) for c in clips)
     out: dict[str, dict[str, PathResult]] = {}
-    for g in ("all", *dict.fromkeys(fams)):
-        sel = np.array([g in ("all", f) for f in fams])
+    heights = sorted({gs[2] for gs in groups}, key=lambda r: int(r[:-1]))
+    for g in ("all", *dict.fromkeys(gs[1] for gs in groups), *heights):
+        sel = np.array([g in gs for gs in groups])
         out[g] = {}
         for k in x:
             raw, centred = rms_mm([errors[k][i] for i in np.flatnonzero(sel)])
@@ -307,7 +319,7 @@ def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]
                 bootstrap_accuracy(correct[k][:, sel]),
                 None if k == "exact" else bootstrap_difference(correct["exact"][:, sel], correct[k][:, sel]),
                 raw, centred, int(missing[k][sel].sum()))
-    return Measured(out, correct, fams)
+    return Measured(out, correct, groups)
 
 
 def drag_rule(f_train: np.ndarray, y_train: np.ndarray, clips: Sequence[Clip], x: dict[str, np.ndarray],

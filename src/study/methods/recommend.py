@@ -22,13 +22,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from study.core import cache
-from study.core.errors import ConfigError, ModelError
+from study.core.errors import ConfigError, ModelError, StudyError
 from study.learn import train
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, hierarchical_bootstrap
 from study.learn.trained import Ensemble
 from study.methods import calibration, certify, operating
 from study.runs import measured as measured_
+from study.runs.measured import candidate_kind as kind  # noqa: F401  (re-exported: recommend.kind)
 from study.runs import recommended as saved
 from study.runs import records
 from study.runs.stats import correct_of
@@ -63,6 +64,14 @@ class Recommendation:
     """Each candidate's seeds, as one classifier (the mean of their probabilities)."""
     configs: dict[str, TrainConfig] = dataclasses.field(default_factory=dict)
     """Each candidate's config (Z; its seeds differ)."""
+    val_floor: dict[str, Interval] = dataclasses.field(default_factory=dict)
+    """The same on the validation throws as the floor path gives them (its fitted error,
+    ``study.methods.floor_model``); empty where the floor path has no error model."""
+
+    @property
+    def floor_choice(self) -> str | None:
+        """The candidate for the floor path: the best on :attr:`val_floor` (None: no floor model)."""
+        return max(self.val_floor, key=lambda k: self.val_floor[k].value) if self.val_floor else None
 
     @property
     def model(self) -> Ensemble:
@@ -71,12 +80,14 @@ class Recommendation:
 
 
 def candidates(runner: Runner, cfgs: dict[str, TrainConfig] | None = None,
-               ob: observe.Observation | None = None) -> dict[str, TrainConfig]:
+               ob: observe.Observation | None = None, floor: observe.Observation | None = None) -> dict[str, TrainConfig]:
     """The Z models a camera could use: each of ``cfgs`` (name -> config; default: the paper's network reading
     positions at Table 1's point and reading positions and velocity at its own grid's point) trained on exact
-    positions, on random observations as the calibrated tracker (or ``ob``) would see them, and on heights as a
-    user's own camera anywhere gives them (``study.simulate.observe.any_camera``; names suffixed ', exact',
-    ', randomised' and ', any-camera')."""
+    positions, on random observations as the calibrated tracker (or ``ob``) would see them, on heights as a
+    user's own camera anywhere gives them (``study.simulate.observe.any_camera``), and, given the floor path's
+    observation ``floor`` (``study.methods.floor_model``), on random observations validated as that path sees the
+    throws and on the floor path's own error drawn afresh every epoch (names suffixed ', exact', ', randomised',
+    ', any-camera', ', floor' and ', floor-fixed': :func:`kind` of a name)."""
     cfgs = cfgs or {"positions": runner.table1_config(), "velocity": runner.table1_config("velocity")}
     out = {}
     for name, cfg in cfgs.items():
@@ -84,46 +95,72 @@ def candidates(runner: Runner, cfgs: dict[str, TrainConfig] | None = None,
         out[f"{name}, exact"] = z
         out[f"{name}, randomised"] = calibration.randomised_config(runner, z, ob)
         out[f"{name}, any-camera"] = dataclasses.replace(out[f"{name}, randomised"], observe="any-camera")
+        if floor is not None:
+            out[f"{name}, floor"] = calibration.randomised_config(runner, z, floor)
+            out[f"{name}, floor-fixed"] = dataclasses.replace(out[f"{name}, floor"], observe="fixed")
     return out
 
 
+def floor_observation(runner: Runner) -> observe.Observation | None:
+    """The floor path's fitted observation (``study.methods.floor_model``), or None where the floor path gave no
+    heights on the development clips (no floor candidates then)."""
+    from study.methods import floor_model
+
+    try:
+        return floor_model.observation(runner)
+    except (StudyError, ValueError):
+        return None
+
+
+def all_candidates(runner: Runner) -> dict[str, TrainConfig]:
+    """:func:`candidates` with the floor path's where it has an error model: what the build trains and chooses
+    from."""
+    return candidates(runner, floor=floor_observation(runner))
+
+
 def recommended(runner: Runner, cands: dict[str, TrainConfig], seeds: Sequence[int] = (0,),
-                ob: observe.Observation | None = None) -> Recommendation:
+                ob: observe.Observation | None = None, floor: observe.Observation | None = None) -> Recommendation:
     """Of ``cands`` (name -> config; :func:`candidates`), the one with the highest mean accuracy over ``seeds`` on
     each seed's validation trajectories as a user's camera gives them (``observe.any_camera``: what ``study classify``
-    reads), each also scored as the calibrated tracker (or ``ob``) observes them (never the test split)."""
+    reads), each also scored as the calibrated tracker (or ``ob``) observes them and, given the floor path's
+    observation ``floor``, as that path gives them (:attr:`Recommendation.floor_choice`); never the test split."""
     if not seeds:
         raise ConfigError("recommended: seeds is empty; give at least one seed")
     ob = ob or calibration.observation(runner)
     first = next(iter(cands.values()))
     T, y = first.n_frames(runner.fps), runner.dataset.train.y
-    correct: dict[str, list[np.ndarray]] = {k: [] for k in cands}
-    correct_user: dict[str, list[np.ndarray]] = {k: [] for k in cands}
+    views = ("calibrated", "user", "floor") if floor is not None else ("calibrated", "user")
+    correct: dict[str, dict[str, list[np.ndarray]]] = {v: {k: [] for k in cands} for v in views}
     members: dict[str, list[train.TrainedModel]] = {k: [] for k in cands}
     for seed in seeds:
         _, va = train.split_train_val(len(y), first.val_fraction, seed)
-        x_val = ob.observe(runner.dataset.train.x[va, :T], runner.fps, seed=6)
-        x_user = observe.any_camera(runner.dataset.train.x[va, :T], runner.fps,
-                                    np.random.default_rng([seed, 7])).astype(np.float32)
+        x = runner.dataset.train.x[va, :T]
+        seen = {"calibrated": ob.observe(x, runner.fps, seed=6),
+                "user": observe.any_camera(x, runner.fps, np.random.default_rng([seed, 7])).astype(np.float32)}
+        if floor is not None:
+            seen["floor"] = floor.observe(x, runner.fps, seed=8)
         for k, c in cands.items():
             m = runner.trained(dataclasses.replace(c, dims="z", seed=seed))
             members[k].append(m)
-            correct[k].append(correct_of([m], x_val, y[va])[0])
-            correct_user[k].append(correct_of([m], x_user, y[va])[0])
-    val = {k: hierarchical_bootstrap(c) for k, c in correct.items()}
-    val_user = {k: hierarchical_bootstrap(c) for k, c in correct_user.items()}
+            for v in views:
+                correct[v][k].append(correct_of([m], seen[v], y[va])[0])
+    val, val_user, val_floor = ({k: hierarchical_bootstrap(c) for k, c in correct.get(v, {}).items()}
+                                for v in ("calibrated", "user", "floor"))
     choice = max(val_user, key=lambda k: val_user[k].value)  # ties: the first candidate
-    return Recommendation(choice, val, val_user, {k: Ensemble(tuple(ms)) for k, ms in members.items()}, dict(cands))
+    return Recommendation(choice, val, val_user, {k: Ensemble(tuple(ms)) for k, ms in members.items()}, dict(cands),
+                          val_floor)
 
 
 def recommend(runner: Runner) -> Recommendation:
-    """Of :func:`candidates` (the grid's seeds, trained together), the one with the highest mean accuracy on the
-    validation throws as a user's camera gives them (:func:`recommended`; never the test split or the videos).
-    Nothing is written: the builder's step :func:`make` saves it for ``study classify``."""
-    cands, seeds = candidates(runner), runner.preset.grid_seeds
+    """Of :func:`all_candidates` (the grid's seeds, trained together), the one with the highest mean accuracy on the
+    validation throws as a user's camera gives them, and the one for the floor path (:func:`recommended`; never the
+    test split or the videos). Nothing is written: the builder's step :func:`make` saves them for ``study
+    classify``."""
+    floor = floor_observation(runner)
+    cands, seeds = candidates(runner, floor=floor), runner.preset.grid_seeds
     runner.prefetch([(runner, [dataclasses.replace(c, seed=s) for c in cands.values() for s in seeds], False)],
                     desc="candidates")
-    return recommended(runner, cands, seeds)
+    return recommended(runner, cands, seeds, floor=floor)
 
 
 def band(p_heavy: np.ndarray, y: np.ndarray, target: float = BAND_TARGET) -> tuple[float, float] | None:
@@ -142,18 +179,22 @@ def band(p_heavy: np.ndarray, y: np.ndarray, target: float = BAND_TARGET) -> tup
     return None if low > high else (low, high)
 
 
-def certified_band(runner: Runner, model: Ensemble, n_frames: int) -> tuple[float, float] | None:
+def certified_band(runner: Runner, model: Ensemble, n_frames: int,
+                   floor: observe.Observation | None = None) -> tuple[float, float] | None:
     """:func:`band` of ``model`` on the certification split (``study.methods.certify``) as a user's camera and one
-    scale give it (``observe.any_camera``), its first ``n_frames`` frames."""
+    scale give it (``observe.any_camera``), or as the floor path gives it (its observation ``floor``), its first
+    ``n_frames`` frames."""
     x, y = certify.split(runner)
-    seen = observe.any_camera(x[:, :n_frames], runner.fps, np.random.default_rng(CERTIFY_OBSERVE_SEED))
+    x = x[:, :n_frames]
+    seen = (observe.any_camera(x, runner.fps, np.random.default_rng(CERTIFY_OBSERVE_SEED)) if floor is None
+            else floor.observe(x, runner.fps, seed=CERTIFY_OBSERVE_SEED))
     return band(model.predict_proba(seen.astype(np.float32))[:, 1], y)
 
 
 def step_key(runner: Runner, measured: measured_.Measured | None = None) -> str:
     """The content key of :func:`make` on ``runner``: every candidate run's key (its data, config and the training
     code), the sweep's numbers and this module's code. The same key, the same saved model."""
-    cands, seeds = candidates(runner), runner.preset.grid_seeds
+    cands, seeds = all_candidates(runner), runner.preset.grid_seeds
     runs = sorted(records.run_key(runner.dataset, dataclasses.replace(c, dims="z", seed=s), False, runner.device)
                   for c in cands.values() for s in seeds)
     sweep = {k: {p: dataclasses.astuple(iv) for p, iv in by.items()} for k, by in (measured or {}).items()}
@@ -171,10 +212,15 @@ def make(runner: Runner, measured: measured_.Measured | None = None) -> Path:
         if saved.read(runner.data_dir).key == key:
             return Path(runner.data_dir) / saved.FILE
     rec = recommend(runner)
-    seeds, cfg = runner.preset.grid_seeds, rec.configs[rec.choice]
-    dirs = tuple(records.model_dir(runner.dataset, dataclasses.replace(cfg, dims="z", seed=s),
-                                   runner.data_dir, runner.device) for s in seeds)
-    accuracy = dict((measured or {}).get(measured_.kind(cfg), {}))
-    one = saved.PathModel(rec.choice, dirs, rec.val_user[rec.choice], accuracy,
-                          certified_band(runner, rec.model, cfg.n_frames(runner.fps)))
-    return saved.save(runner.data_dir, runner.preset.name, {saved.ONE_SCALE: one}, key, measured or {})
+
+    def path_model(name: str, val: Interval, floor: observe.Observation | None = None) -> saved.PathModel:
+        cfg = rec.configs[name]
+        dirs = tuple(records.model_dir(runner.dataset, dataclasses.replace(cfg, dims="z", seed=s),
+                                       runner.data_dir, runner.device) for s in runner.preset.grid_seeds)
+        return saved.PathModel(name, dirs, val, dict((measured or {}).get(kind(name), {})),
+                               certified_band(runner, rec.models[name], cfg.n_frames(runner.fps), floor))
+
+    paths = {saved.ONE_SCALE: path_model(rec.choice, rec.val_user[rec.choice])}
+    if rec.floor_choice is not None:
+        paths[saved.FLOOR] = path_model(rec.floor_choice, rec.val_floor[rec.floor_choice], floor_observation(runner))
+    return saved.save(runner.data_dir, runner.preset.name, paths, key, measured or {})

@@ -13,9 +13,10 @@ Class = Literal["light", "heavy"]
 """The study's classes (``study.CLASSES``)."""
 
 
-Training = Literal["exact", "randomised", "any-camera"]
-"""How a candidate was trained: on exact positions, on random observations, or on heights as a user's own camera
-gives them."""
+Training = Literal["exact", "randomised", "any-camera", "floor", "floor-fixed"]
+"""How a candidate was trained: on exact positions, on random observations, on heights as a user's own camera
+gives them, on random observations for the floor path's error, or on that error itself
+(``study.methods.recommend.candidates``)."""
 
 
 ModelKey = Literal["table1", "recommended"]
@@ -30,6 +31,9 @@ class Candidate(Reported):
     """Accuracy on the validation throws (mean over seeds), observed as the calibrated tracker observes them."""
     val_user: Number
     """The same as a user's own camera, anywhere, gives them (``study.simulate.observe.any_camera``): what chooses."""
+    val_floor: Number | None = None
+    """The same as the floor path gives them (its fitted error): what chooses the floor path's model (None: the
+    floor path had no error model)."""
 
 
 @dataclass(frozen=True)

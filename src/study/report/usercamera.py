@@ -13,7 +13,7 @@ from study.report.reported import Leaf, Number, Reported, named
 from study.see.paths import PathKey  # the paths are defined once, there
 from study.simulate.observe import CAMERA_FAMILIES
 
-Group = Literal[("all", *(f.key for f in CAMERA_FAMILIES))]  # type: ignore[valid-type]
+Family = Literal[("all", *(f.key for f in CAMERA_FAMILIES))]  # type: ignore[valid-type]
 """The camera sweep's clips pooled, or one camera family (``study.simulate.observe.CAMERA_FAMILIES``)."""
 
 
@@ -46,8 +46,9 @@ class SweepGroup(Reported):
 class Sweep(Reported):
     """What a camera nobody measured leaves of the heights and of the answer (the camera sweep)."""
 
-    groups: dict[Group, SweepGroup] = named("")
-    """All clips and each camera family."""
+    groups: dict[str, SweepGroup] = named("")
+    """All clips (``all``), each camera family (:data:`Family`) and each frame height (``480p``, ``720p``: the sweep's
+    ``SIZES``, ``study.methods.camera_cost.groups_of``)."""
     drag: dict[PathKey, Number] = named("drag")
     """The drag rule's accuracy on the clips, by path."""
     size_error: Number | None = None

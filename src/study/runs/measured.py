@@ -29,8 +29,15 @@ Measured = Mapping[str, Mapping[str, Interval]]
 
 def kind(cfg: TrainConfig) -> str:
     """A model's kind as the camera sweep tells them apart: what it reads and what it was trained on,
-    ``"velocity-exact"``, ``"positions-any-camera"`` and so on."""
+    ``"velocity-exact"``, ``"positions-any-camera"`` and so on (a model trained for the floor path is
+    ``"…-randomised"`` by its config alone: :func:`candidate_kind` names it by what it was chosen for)."""
     return f"{cfg.inputs}-{cfg.observe}"
+
+
+def candidate_kind(name: str) -> str:
+    """The kind of a recommended model's candidate by its name (``study.methods.recommend.candidates``):
+    ``"positions, floor"`` -> ``"positions-floor"``; for the other candidates what :func:`kind` of its config says."""
+    return name.replace(", ", "-")
 
 
 def measured_json(measured: Measured) -> dict[str, Any]:

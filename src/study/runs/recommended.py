@@ -3,7 +3,7 @@ without ``--model``: saved and loaded here, chosen elsewhere (``study.methods.re
 runs once the chapters' runs are trained; never a side effect of executing a page).
 
 ``recommended.json`` holds one model per *camera path*, the way a video's pixels become heights (:data:`PATHS`:
-``one-scale``, one scale per clip from the object's size; the floor camera adds its own), each with
+``one-scale``, one scale per clip from the object's size; ``floor``, the camera floor marks give), each with
 
 - the chosen candidate's name and its seeds' model folders (relative to the data folder, so the folder can move);
 - its validation accuracy, and the accuracies the study measured for it on video (by path, each an interval:
@@ -40,7 +40,9 @@ FORMATS = ("study.recommended/1", FORMAT)
 """Every format this code reads: format 1 held one model (the one-scale path's) and no accuracies on video."""
 ONE_SCALE = "one-scale"
 """The camera path of a video read by one scale per clip (``study classify`` without a floor)."""
-PATHS: tuple[str, ...] = (ONE_SCALE,)
+FLOOR = "floor"
+"""The camera path of a video whose camera floor marks give (``study classify --floor``)."""
+PATHS: tuple[str, ...] = (ONE_SCALE, FLOOR)
 """The camera paths a recommended model can serve."""
 
 
