@@ -37,8 +37,8 @@ FAMILIES: dict[str, CameraFamily] = {f.key: f for f in CAMERA_FAMILIES}
 """The camera families by key (``study.simulate.observe.CAMERA_FAMILIES``, where each is defined once)."""
 FOV = (50.0, 90.0)
 """Vertical field of view, degrees."""
-SIZES = ((640, 480), (854, 480), (1280, 720))
-"""Frame sizes, pixels (480p and 720p)."""
+SIZES = ((640, 480), (854, 480), (1280, 720), (1920, 1080))
+"""Frame sizes, pixels (480p, 720p and 1080p: the results are pooled by frame height too)."""
 RATES = (30.0, 60.0)
 """Frame rates, frames per second."""
 COLOURS: dict[str, tuple[float, float, float]] = {
