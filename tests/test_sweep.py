@@ -88,6 +88,10 @@ def test_the_camera_cost_scores_every_path_on_the_same_clips(smoke):
         assert r.accuracy.value == pytest.approx(0.5 * answered)
         assert r.cost.value == pytest.approx(exact.accuracy.value - r.accuracy.value)
         assert got.difference("exact", name).value == pytest.approx(r.cost.value)
+    known = res["all"][camera_cost.KNOWN]  # the tracker's pixels through the clip's own camera at the true depth
+    assert known.no_heights == 0 and 0 < known.rms_centred_mm < 1000, "every tracked clip, heights in millimetres"
+    assert got.difference(camera_cost.KNOWN, camera_cost.FLOOR_PATH).value == pytest.approx(
+        known.accuracy.value - res["all"][camera_cost.FLOOR_PATH].accuracy.value)
     print({k: (r.rms_mm, r.rms_centred_mm, r.no_heights) for k, r in res["all"].items()})
     assert res["all"]["rest size"].no_heights == 0, "every smoke clip is tracked"
     assert res["all"]["mean silhouette"].rms_centred_mm < 100, "the heights follow the throw"

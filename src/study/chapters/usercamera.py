@@ -39,7 +39,8 @@ if TYPE_CHECKING:
 # ---------------------------------------------------------------------------------------------
 # The camera sweep: a camera nobody measured (study.methods.sweep, study.methods.camera_cost)
 
-PATH_KEYS: dict[str, PathKey] = {paths.EXACT: paths.EXACT, **{p.words: p.key for p in paths.PATHS}}
+PATH_KEYS: dict[str, PathKey] = {paths.EXACT: paths.EXACT, paths.KNOWN_WORDS: paths.KNOWN,
+                                  **{p.words: p.key for p in paths.PATHS}}
 """Each path's name in the tables -> its key in the results file."""
 
 
@@ -142,12 +143,17 @@ def _sweep_table(cs: CameraSweep) -> Table:
     for g, res in cs.recommended.results.items():
         row = {"group": g, "clips": cs.clips_in(g),
                "exact": pct_ci(res["exact"].accuracy)}
-        for k in camera_cost.PATHS:
+        for k in _shown(res):
             r = res[k]
             row[k] = f"{pct(r.accuracy.value)} (cost {points(r.cost)})" + (f", {r.no_heights} without" if r.no_heights else "")
         rows.append(row)
     return Table(rows, {"group": "cameras", "clips": "clips", "exact": "exact heights [95 % CI]",
-                        **{k: f"{k} (exact minus it, points [95 % CI])" for k in camera_cost.PATHS}})
+                        **{k: f"{k} (exact minus it, points [95 % CI])" for k in _shown(cs.recommended.results["all"])}})
+
+
+def _shown(res: dict[str, camera_cost.PathResult]) -> tuple[str, ...]:
+    """The ways to heights a table shows: the known camera's where it was measured, then every path."""
+    return tuple(k for k in camera_cost.MEASURED if k in res)
 
 
 def _heights_table(cs: CameraSweep) -> Table:
@@ -158,11 +164,11 @@ def _heights_table(cs: CameraSweep) -> Table:
         row = {"group": g, "floor": "—" if fl is None else f"{1000 * fl.true_rows:.0f}",
                "tracked": "—" if fl is None else f"{1000 * fl.tracked_rows:.0f}"}
         row |= {k: "—" if math.isnan(res[k].rms_mm) else f"{res[k].rms_centred_mm:.0f} ({res[k].rms_mm:.0f})"
-                for k in camera_cost.PATHS}
+                for k in _shown(res)}
         rows.append(row)
     return Table(rows, {"group": "cameras", "floor": "one-scale floor, true rows (mm)",
                         "tracked": "the same, tracked rows (mm)",
-                        **{k: f"{k}: mm RMS, median removed (raw)" for k in camera_cost.PATHS}})
+                        **{k: f"{k}: mm RMS, median removed (raw)" for k in _shown(cs.recommended.results["all"])}})
 
 
 def _candidates_sweep_table(cs: CameraSweep) -> Table:
@@ -267,11 +273,17 @@ class UserCamera:
         name = self.camera.floor_choice
         if name is None:
             return words + "; no model was trained for the floor path (its error model could not be fitted)"
-        m = self.camera.measured[name].results["all"]
-        return (words + f"; the model trained for the floor path's error ({name}, chosen on validation throws as "
-                f"that path gives them) labels {pct_ci(m[camera_cost.FLOOR_PATH].accuracy)} through it, "
-                f"{points(m[camera_cost.FLOOR_PATH].cost)} below its own {pct_ci(m['exact'].accuracy)} from the exact "
+        m = self.camera.measured[name]
+        r = m.results["all"]
+        said = (words + f"; the model trained for the floor path's error ({name}, chosen on validation throws as "
+                f"that path gives them) labels {pct_ci(r[camera_cost.FLOOR_PATH].accuracy)} through it, "
+                f"{points(r[camera_cost.FLOOR_PATH].cost)} below its own {pct_ci(r['exact'].accuracy)} from the exact "
                 "heights")
+        if camera_cost.KNOWN not in r:
+            return said
+        return (said + f" and {pct_ci(r[camera_cost.KNOWN].accuracy)} from the tracker's pixels through the known "
+                f"camera (the floor path's limit: {points(m.difference(camera_cost.KNOWN, camera_cost.FLOOR_PATH))} "
+                f"more; heights {r[camera_cost.KNOWN].rms_centred_mm:.0f} mm off)")
 
     @property
     def floor_model_words(self) -> str:

@@ -38,13 +38,18 @@ from study.methods.videos import Video
 from study.runs.stats import correct_of
 from study.see import floor, geometry, paths, render, track
 from study.see.camera import Camera
-from study.see.gaps import set_scale
+from study.see.gaps import set_camera, set_scale
 from study.see.scale import DEFAULT, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 from study.simulate import measure as motion
 
 PATHS: tuple[str, ...] = tuple(p.words for p in paths.PATHS)
 """The user's paths from pixels to metres by their words, in the order the tables show them (``study.see.paths``)."""
+KNOWN = paths.KNOWN_WORDS
+"""The tracker's pixels through the clip's own camera at each frame's true depth (``study.see.gaps.set_camera``):
+what a path that knows the camera, as the floor path does, could reach at best; measured where the camera is known."""
+MEASURED: tuple[str, ...] = (KNOWN, *PATHS)
+"""Every way a clip's tracked pixels become heights: the known camera's, then the user's paths."""
 FLOOR_PATH = next(p.words for p in paths.PATHS if p.key == "floor")
 """The path through floor marks (it needs the clip's camera to place the marks)."""
 CLICK_PX = 1.0
@@ -94,8 +99,9 @@ class Heights:
 
 
 def heights(clip: Clip, shape: ObjectShape) -> Heights:
-    """Track ``clip`` once (pixels) and turn it into heights by every path of :data:`PATHS`, for an object of
-    ``shape`` (the floor path through marks placed by the clip's camera)."""
+    """Track ``clip`` once (pixels) and turn it into heights through the clip's own camera (:data:`KNOWN`) and by
+    every path of :data:`PATHS`, for an object of ``shape`` (the floor path through marks placed by the clip's
+    camera)."""
     return video_heights(clip.video, shape, lambda world: sweep.camera(clip.shot, world))
 
 
@@ -120,7 +126,17 @@ def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], C
     try:
         px = track.track_video(v.path, v.track_config())
     except StudyError as e:
-        return Heights(exact, dict.fromkeys(PATHS, str(e)), {})
+        return Heights(exact, dict.fromkeys(MEASURED, str(e)), {})
+    if camera is None:
+        paths[KNOWN] = "no camera: the video's camera is not known"
+    else:  # the camera at the video's own size (an odd frame size is written one pixel narrower)
+        own = camera(world)
+        cam = replace(own, width=px.width or own.width, height=px.height_px or own.height)
+        depth = cam.depth_of(world)
+        depth = np.concatenate([depth, np.full(max(0, len(px.t) - len(depth)), depth[-1])])[: len(px.t)]
+        known = set_camera(px, cam, depth, rest)
+        tracks[KNOWN] = known
+        paths[KNOWN] = _padded(np.where(known.status > 0, known.height, np.nan), len(exact))
     for name in PATHS:
         try:
             if name != FLOOR_PATH:
@@ -133,10 +149,13 @@ def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], C
             paths[name] = str(e)
             continue
         tracks[name] = t
-        h = np.where(t.status > 0, t.height, np.nan)
-        paths[name] = h[: len(exact)] if len(h) >= len(exact) else np.pad(h, (0, len(exact) - len(h)),
-                                                                           constant_values=np.nan)
+        paths[name] = _padded(np.where(t.status > 0, t.height, np.nan), len(exact))
     return Heights(exact, paths, tracks)
+
+
+def _padded(h: np.ndarray, n: int) -> np.ndarray:
+    """(n,) the first ``n`` of ``h``, NaN beyond its end."""
+    return h[:n] if len(h) >= n else np.pad(h, (0, n - len(h)), constant_values=np.nan)
 
 
 def truth_trajectory(video: Video, fps: float | None = None) -> Trajectory:
@@ -214,7 +233,7 @@ def floors(clips: Sequence[Clip], tracked: Sequence[Heights]) -> dict[str, Floor
 
 def _errors(h: Heights, path: str) -> np.ndarray:
     """(frames,) one video's height error by ``path`` on every frame it has a height for, metres."""
-    got = h.paths[path]
+    got = h.paths.get(path, "not measured")
     return np.array([]) if isinstance(got, str) else (got - h.exact)[np.isfinite(got)]
 
 
@@ -229,8 +248,9 @@ def rms_mm(errors: Sequence[np.ndarray]) -> tuple[float, float]:
 
 
 def height_errors(tracked: Sequence[Heights]) -> dict[str, tuple[float, float]]:
-    """Each path's height error over ``tracked`` videos: path -> :func:`rms_mm` (raw, median removed), mm."""
-    return {k: rms_mm([_errors(h, k) for h in tracked]) for k in PATHS}
+    """Each path's height error over ``tracked`` videos (and the known camera's, where measured): path ->
+    :func:`rms_mm` (raw, median removed), mm."""
+    return {k: rms_mm([_errors(h, k) for h in tracked]) for k in MEASURED if any(k in h.paths for h in tracked)}
 
 
 @dataclass(frozen=True)
@@ -263,13 +283,13 @@ def inputs(clips: Sequence[Clip], tracked: Sequence[Heights], fps: float, n_fram
            ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """What a model reads of every clip by every path: (path -> (n_clips, n_frames, 3) float32 metres, path ->
     (n_clips,) bool, the clips the path has no heights for, whose rows are zeros)."""
-    names = ("exact", *PATHS)
+    names = ("exact", *MEASURED)
     x = {k: np.zeros((len(clips), n_frames, 3), np.float32) for k in names}
     missing = {k: np.zeros(len(clips), bool) for k in names}
     for i, (clip, h) in enumerate(zip(clips, tracked, strict=True)):
         x["exact"][i] = exact_input(clip, fps, n_frames)
-        for k in PATHS:
-            if isinstance(h.paths[k], str):
+        for k in MEASURED:
+            if isinstance(h.paths.get(k, "not measured"), str):
                 missing[k][i] = True
                 continue
             try:
@@ -306,7 +326,7 @@ def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]
     x, missing = read if read is not None else inputs(clips, tracked, first.fps, first.n_frames)
     y = np.array([c.video.label == "heavy" for c in clips])
     correct = {k: correct_of(members, xk, y) & ~missing[k] for k, xk in x.items()}
-    errors = {"exact": [np.zeros(1)] * len(clips), **{k: [_errors(h, k) for h in tracked] for k in PATHS}}
+    errors = {"exact": [np.zeros(1)] * len(clips), **{k: [_errors(h, k) for h in tracked] for k in MEASURED}}
     groups = tuple(groups_of(c) for c in clips)
     out: dict[str, dict[str, PathResult]] = {}
     heights = sorted({gs[2] for gs in groups}, key=lambda r: int(r[:-1]))

@@ -38,6 +38,11 @@ PATHS: tuple[CameraPath, ...] = (
 
 EXACT = "exact"
 """The results' key of the renderer's own heights, beside the paths."""
+KNOWN = "known"
+"""The results' key of the tracker's pixels through the clip's own camera at each frame's true depth: the limit of
+any path that knows the camera (the floor path's), beside the paths; no user has it."""
+KNOWN_WORDS = "known camera"
+"""What the book calls :data:`KNOWN`."""
 
 SCALE_FROM: tuple[str, ...] = tuple(p.key for p in PATHS if p.one_scale)
 """How one scale can be read (``study track --scale-from``)."""
@@ -49,5 +54,5 @@ truth, and the paths' accuracies cannot be told apart (the real-world chapter sh
 
 BY_WORDS: dict[str, CameraPath] = {p.words: p for p in PATHS}
 
-PathKey = Literal[(EXACT, *(p.key for p in PATHS))]  # type: ignore[valid-type]
-"""How a clip's heights were had: exactly, or by one of :data:`PATHS`."""
+PathKey = Literal[(EXACT, KNOWN, *(p.key for p in PATHS))]  # type: ignore[valid-type]
+"""How a clip's heights were had: exactly, through the known camera at the true depth, or by one of :data:`PATHS`."""
