@@ -125,16 +125,16 @@ def test_the_floor_paths_model_is_reported_through_its_path_with_its_error_model
                                    2288, 100, 0.014, 0.05, -0.02, 0.96, "the floor path on 18 development clips")
     loose = floor_model.Check((1, 2, 5, 10, 20), (0.93, 0.84, 0.58, 0.26, 0.03), (0.96, 0.92, 0.82, 0.66, 0.44))
     cs = dataclasses.replace(cs, floor_choice="velocity, exact", floor_fit=floor_model.FloorFit(fit, loose))
-    assert "from the tracker's pixels through the known" not in _result(cs).floor_marks_words, "not measured: unsaid"
+    assert "through the known camera" not in _result(cs).floor_marks_words, "not measured: unsaid"
     m = cs.measured["velocity, exact"]
     m.results["all"][camera_cost.KNOWN] = camera_cost.PathResult(_iv(0.75), _iv(0.05), 30.0, 20.0, 0)
     m.correct[camera_cost.KNOWN] = m.correct["mean silhouette"].copy()
     r = _result(cs)
     said = r.floor_marks_words  # the known camera labels 12 of 20 clips right in every seed, the floor path none
-    assert "and 75.0 % [70.0, 80.0] from the tracker's pixels through the known camera (the floor path's limit: +60.0 " \
-           "points [" in said and said.endswith("more; heights 20 mm off)")
-    assert "the model trained for the floor path's error (velocity, exact" in r.floor_marks_words
-    assert "labels 60.0 % [55.0, 65.0] through it, +20.0 points [+15.0, +25.0] below its own 80.0 %" in r.floor_marks_words
+    assert "from exact heights, 75.0 % [70.0, 80.0] through the known camera (the path's limit, +60.0 points [" \
+           in said and said.endswith("more; heights 20 mm off))")
+    assert "the model trained for that path (velocity, exact) labels 60.0 % [55.0, 65.0] through it (80.0 % " \
+           "[75.0, 85.0] from exact heights" in r.floor_marks_words
     words = r.floor_model_words
     assert words.startswith("fitted on the floor path on 18 development clips: a per-throw offset of 9 mm and 68 mm")
     assert "which it does not hold: the path's error is 0.26 correlated 10 frames on, the model's 0.66" in words

@@ -275,15 +275,13 @@ class UserCamera:
             return words + "; no model was trained for the floor path (its error model could not be fitted)"
         m = self.camera.measured[name]
         r = m.results["all"]
-        said = (words + f"; the model trained for the floor path's error ({name}, chosen on validation throws as "
-                f"that path gives them) labels {pct_ci(r[camera_cost.FLOOR_PATH].accuracy)} through it, "
-                f"{points(r[camera_cost.FLOOR_PATH].cost)} below its own {pct_ci(r['exact'].accuracy)} from the exact "
-                "heights")
-        if camera_cost.KNOWN not in r:
-            return said
-        return (said + f" and {pct_ci(r[camera_cost.KNOWN].accuracy)} from the tracker's pixels through the known "
-                f"camera (the floor path's limit: {points(m.difference(camera_cost.KNOWN, camera_cost.FLOOR_PATH))} "
-                f"more; heights {r[camera_cost.KNOWN].rms_centred_mm:.0f} mm off)")
+        known = ("" if camera_cost.KNOWN not in r else
+                 f", {pct_ci(r[camera_cost.KNOWN].accuracy)} through the known camera (the path's limit, "
+                 f"{points(m.difference(camera_cost.KNOWN, camera_cost.FLOOR_PATH))} more; heights "
+                 f"{r[camera_cost.KNOWN].rms_centred_mm:.0f} mm off)")
+        return (words + f"; the model trained for that path ({name}) labels "
+                f"{pct_ci(r[camera_cost.FLOOR_PATH].accuracy)} through it ({pct_ci(r['exact'].accuracy)} from exact "
+                f"heights{known})")
 
     @property
     def floor_model_words(self) -> str:
