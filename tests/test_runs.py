@@ -294,8 +294,9 @@ def test_the_recommended_model_is_the_best_candidate_on_observed_validation_thro
     assert cands["velocity, any-camera"] == dataclasses.replace(cands["velocity, randomised"], observe="any-camera")
     assert cands["positions, floor"].observe == "randomised" and cands["positions, floor"].observe_noise == 0.03
     assert cands["positions, floor-fixed"] == dataclasses.replace(cands["positions, floor"], observe="fixed")
-    assert all(recommend.kind(n) == measured.kind(c) for n, c in cands.items() if not n.endswith("floor"))
+    assert all(recommend.kind(n) == measured.kind(c) for n, c in cands.items() if ", floor" not in n)
     assert recommend.kind("positions, floor") == "positions-floor", "named apart from the calibrated randomised kind"
+    assert recommend.kind("velocity, floor-fixed") == "velocity-floor-fixed", "and from the fixed tracker error's"
     rec = recommend.recommended(r, cands, seeds=(0, 1), ob=ob, floor=floor)
     choice, val, user, models = rec.choice, rec.val, rec.val_user, rec.models
     assert set(val) == set(user) == set(rec.val_floor) == set(models) == set(cands)

@@ -125,7 +125,7 @@ def test_the_drag_rule_on_the_sweep_reads_each_paths_first_fall(smoke):
     finally:
         for c, lab in zip(clips, y):
             c.video.label = "heavy" if lab else "light"
-    assert acc["exact"].value == 1.0 and set(acc) == {"exact", *camera_cost.PATHS}
+    assert acc["exact"].value == 1.0 and set(acc) == {"exact", *camera_cost.MEASURED}
 
 
 def _truth_clip(tmp_path, z, v):
