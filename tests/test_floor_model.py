@@ -42,3 +42,12 @@ def test_a_check_with_no_varying_error_is_refused():
     fit = tracker_model.TrackerFit(TrackerNoise(), 0.0, {}, 1, 10, 0, 0.0, 0.0, 0.0, 0.0)
     with pytest.raises(DataError, match="no varying error"):
         floor_model.check(flat, fit)
+
+
+def test_no_floor_heights_on_the_development_clips_means_no_floor_model(monkeypatch):
+    """The one place a failed fit becomes 'no floor model' (the candidates and the page both ask here)."""
+    def no_heights(runner, progress=False):
+        raise DataError("floor model: the floor path gave no heights on any of the 4 development clips")
+
+    monkeypatch.setattr(floor_model, "fit", no_heights)
+    assert floor_model.fitted(None) is None and floor_model.observation(None) is None

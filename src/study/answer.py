@@ -128,9 +128,8 @@ class _Model:
     def band_for(self, route: str) -> tuple[float, float] | None:
         """Its cannot-tell band where the answer's heights came by the path it was recommended for (``route``:
         ``trust.path_of``), else None."""
-        if self.recommended_for == recommended.FLOOR:
-            return self.band if route == FLOOR else None
-        return self.band if self.recommended_for is not None and route in SCALE_FROM else None
+        served = recommended.FLOOR if route == FLOOR else recommended.ONE_SCALE if route in SCALE_FROM else None
+        return self.band if served is not None and served == self.recommended_for else None
 
 
 def _model(model: str | Path | TrainedModel | Ensemble | None, data_dir: str | Path | None,
@@ -140,9 +139,10 @@ def _model(model: str | Path | TrainedModel | Ensemble | None, data_dir: str | P
     from study.core import datadir
 
     if model is None:
-        rec = recommended.read(datadir.resolve(data_dir))
+        folder = datadir.resolve(data_dir)
+        rec = recommended.read(folder)
         path = recommended.FLOOR if floor and recommended.FLOOR in rec.paths else recommended.ONE_SCALE
-        ensemble, rec = recommended.load(datadir.resolve(data_dir), path)
+        ensemble = recommended.ensemble(rec, folder, path)
         which = rec.describe(path) + (" for one scale: this build recommends none for the floor path"
                                       if floor and path != recommended.FLOOR else "")
         return _Model(ensemble, which, rec.path(path).band, measurements(rec), path, rec.path(path).name)

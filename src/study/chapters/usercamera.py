@@ -12,7 +12,6 @@ too. :func:`compute` returns :class:`UserCamera`; :class:`Numbers` is what it re
 
 from __future__ import annotations
 
-import contextlib
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -21,7 +20,6 @@ import numpy as np
 
 from study.learn import train
 from study.learn.metrics import Interval
-from study.core.errors import StudyError
 from study.methods import camera_cost, floor_model, sweep
 from study.methods.floor_model import FloorFit
 from study.methods.recommend import Recommendation, kind, recommend
@@ -106,12 +104,9 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
     times = sweep.render_times(clips)
     cpu, wall = (sum(t[k] for t in times.values()) for k in ("cpu_s", "wall_s"))
     kinds = {name: kind(name) for name in rec.models}
-    fitted = None
-    with contextlib.suppress(StudyError):  # no floor heights on the development clips: said on the page
-        fitted = floor_model.fit(runner, progress)
     return CameraSweep(tuple(clips), measured, rec.choice, kinds, camera_cost.floors(clips, tracked), drag,
                        camera_cost.size_error(clips, tracked, shape), (cpu, wall, len(times)), rec.floor_choice,
-                       fitted)
+                       floor_model.fitted(runner, progress))
 
 
 def _sweep_numbers(cs: CameraSweep) -> Sweep:
@@ -294,7 +289,8 @@ class UserCamera:
         fits = (f"which holds at every lag from {c.lags[0]} to {c.lags[-1]} frames (within {c.worst:.2f})"
                 if c.worst <= floor_model.FITS else
                 f"which it does not hold: the path's error is {c.measured[k]:.2f} correlated {c.lags[k]} frames "
-                f"on, the model's {c.model[k]:.2f} (smooth over a few frames, it forgets within a flight)")
+                f"on, the model's {c.model[k]:.2f} (the path's "
+                + ("forgets faster" if c.measured[k] < c.model[k] else "remembers longer") + ")")
         return (f"fitted on {f.fit.fitted_on}: a per-throw offset of {1000 * m.offset:.0f} mm and "
                 f"{1000 * m.flight:.0f} mm in flight ({1000 * m.contact:.0f} mm in contact), correlated "
                 f"{m.rho:.2f} from frame to frame as an AR(1), {fits}")

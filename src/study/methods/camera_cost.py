@@ -329,8 +329,8 @@ def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]
     errors = {"exact": [np.zeros(1)] * len(clips), **{k: [_errors(h, k) for h in tracked] for k in MEASURED}}
     groups = tuple(groups_of(c) for c in clips)
     out: dict[str, dict[str, PathResult]] = {}
-    heights = sorted({gs[2] for gs in groups}, key=lambda r: int(r[:-1]))
-    for g in ("all", *dict.fromkeys(gs[1] for gs in groups), *heights):
+    sizes = sorted({gs[2] for gs in groups}, key=lambda r: int(r[:-1]))  # by frame height
+    for g in ("all", *dict.fromkeys(gs[1] for gs in groups), *sizes):
         sel = np.array([g in gs for gs in groups])
         out[g] = {}
         for k in x:

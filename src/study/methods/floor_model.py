@@ -5,8 +5,8 @@ The floor path (``study.see.floor``) is run on development clips of the camera s
 from another seed (:data:`DEVELOPMENT_SEED`), never the scored clips -- and its heights against the renderer's truth
 are fitted with the tracker's error model (``study.methods.tracker_model.fit``: a per-throw offset, noise correlated
 from frame to frame, one level in flight and one in contact). :func:`check` says how far that model describes the
-floor path's error beyond the four statistics the fit matches: the autocorrelation at longer lags, where a per-arc
-depth error (one wrong depth for a whole flight) would show as more correlation than one AR(1) keeps.
+floor path's error beyond the four statistics the fit matches: the autocorrelation at longer lags, where an error
+that is smooth within a flight and starts afresh at the next would fall off otherwise than one AR(1).
 
 The fit is cached in the data folder, keyed by the development clips and this code.
 """
@@ -139,7 +139,17 @@ def fit(runner: Runner, progress: bool = False) -> FloorFit:
     return runner.memo("floor_fit", make)
 
 
-def observation(runner: Runner) -> observe.Observation:
-    """The floor path's observation: its fitted error and its share of lost frames (:func:`fit`)."""
-    return fit(runner).fit.observation()
+def fitted(runner: Runner, progress: bool = False) -> FloorFit | None:
+    """:func:`fit`, or None where the floor path gave no heights on the development clips (then no model is trained
+    for it, and the page says so)."""
+    try:
+        return fit(runner, progress)
+    except DataError:
+        return None
+
+
+def observation(runner: Runner) -> observe.Observation | None:
+    """The floor path's observation, its fitted error and its share of lost frames (:func:`fitted`; None without)."""
+    f = fitted(runner)
+    return None if f is None else f.fit.observation()
 

@@ -22,12 +22,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from study.core import cache
-from study.core.errors import ConfigError, ModelError, StudyError
+from study.core.errors import ConfigError, ModelError
 from study.learn import train
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval, hierarchical_bootstrap
 from study.learn.trained import Ensemble
-from study.methods import calibration, certify, operating
+from study.methods import calibration, certify, floor_model, operating
 from study.runs import measured as measured_
 from study.runs.measured import candidate_kind as kind  # noqa: F401  (re-exported: recommend.kind)
 from study.runs import recommended as saved
@@ -101,21 +101,10 @@ def candidates(runner: Runner, cfgs: dict[str, TrainConfig] | None = None,
     return out
 
 
-def floor_observation(runner: Runner) -> observe.Observation | None:
-    """The floor path's fitted observation (``study.methods.floor_model``), or None where the floor path gave no
-    heights on the development clips (no floor candidates then)."""
-    from study.methods import floor_model
-
-    try:
-        return floor_model.observation(runner)
-    except (StudyError, ValueError):
-        return None
-
-
 def all_candidates(runner: Runner) -> dict[str, TrainConfig]:
     """:func:`candidates` with the floor path's where it has an error model: what the build trains and chooses
     from."""
-    return candidates(runner, floor=floor_observation(runner))
+    return candidates(runner, floor=floor_model.observation(runner))
 
 
 def recommended(runner: Runner, cands: dict[str, TrainConfig], seeds: Sequence[int] = (0,),
@@ -156,7 +145,7 @@ def recommend(runner: Runner) -> Recommendation:
     validation throws as a user's camera gives them, and the one for the floor path (:func:`recommended`; never the
     test split or the videos). Nothing is written: the builder's step :func:`make` saves them for ``study
     classify``."""
-    floor = floor_observation(runner)
+    floor = floor_model.observation(runner)
     cands, seeds = candidates(runner, floor=floor), runner.preset.grid_seeds
     runner.prefetch([(runner, [dataclasses.replace(c, seed=s) for c in cands.values() for s in seeds], False)],
                     desc="candidates")
@@ -222,5 +211,5 @@ def make(runner: Runner, measured: measured_.Measured | None = None) -> Path:
 
     paths = {saved.ONE_SCALE: path_model(rec.choice, rec.val_user[rec.choice])}
     if rec.floor_choice is not None:
-        paths[saved.FLOOR] = path_model(rec.floor_choice, rec.val_floor[rec.floor_choice], floor_observation(runner))
+        paths[saved.FLOOR] = path_model(rec.floor_choice, rec.val_floor[rec.floor_choice], floor_model.observation(runner))
     return saved.save(runner.data_dir, runner.preset.name, paths, key, measured or {})

@@ -150,11 +150,16 @@ def read(data_dir: str | Path) -> Recommended:
 def load(data_dir: str | Path, path: str = ONE_SCALE) -> tuple[Ensemble, Recommended]:
     """The model the last build in ``data_dir`` recommends for camera ``path``, as one classifier, and what its file
     says."""
+    rec = read(data_dir)
+    return ensemble(rec, data_dir, path), rec
+
+
+def ensemble(rec: Recommended, data_dir: str | Path, path: str = ONE_SCALE) -> Ensemble:
+    """The model ``rec`` (read from ``data_dir``) names for camera ``path``, its seeds loaded as one classifier."""
     from study.learn import train
 
-    rec = read(data_dir)
     for m in rec.path(path).models:
         if not m.is_dir():
             raise ModelError(f"{Path(data_dir) / FILE} names the model folder {m}, which is gone; build the book "
                              "again, or pass --model DIR")
-    return Ensemble(tuple(train.load(m) for m in rec.path(path).models)), rec
+    return Ensemble(tuple(train.load(m) for m in rec.path(path).models))
