@@ -127,7 +127,8 @@ def test_bad_config_is_refused_where_it_is_made():
                        (dict(rotate=-1.0), "rotate"), (dict(rotate=181.0), "rotate"),
                        (dict(rotate=90.0, dims="z"), "rotate .* dims 'z'"), (dict(inputs="heading"), "inputs"),
                        (dict(dims="Z"), "dims = 'Z' is unknown; use 'z' \\(lower case\\)"),
-                       (dict(epochs=0), "TrainConfig.epochs"), (dict(observe="Any-Camera"), "use 'any-camera'")]:
+                       (dict(epochs=0), "TrainConfig.epochs"), (dict(observe="Any-Camera"), "use 'any-camera'"),
+                       (dict(plateau_epochs=0), "TrainConfig.plateau_epochs = 0; it must be a whole number")]:
         with pytest.raises(ConfigError, match=match):  # at construction: before, dims="Z" failed only at fit
             dataclasses.replace(TINY, **bad)
 
