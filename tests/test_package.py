@@ -150,7 +150,8 @@ def test_every_readme_recipe_runs_as_written(tmp_path):
         if argv[:2] == ["study", "classify"]:
             assert "trust: " in proc.stdout, f"{line}: {proc.stdout}"
             assert ("floor marks path" in proc.stdout) == ("--floor" in argv), proc.stdout
-    for made in ("throw.csv", "throw-tracked.mp4", "answers.csv", "data-seed3.ipynb", "samples/FLOOR.csv"):
+    for made in ("throw.csv", "throw-tracked.mp4", "answers.csv", "data-seed3.ipynb", "samples/FLOOR.csv",
+                 "samples/MARKS.csv"):
         assert (tmp_path / made).is_file(), made
 
 

@@ -23,7 +23,8 @@ from study.report.text import Table
 from study.runs import measured, recommended
 from study.see import track
 from study.see.config import TrackConfig
-from study.see.floor import Floor, on_floor, read_floor
+from study.see.floor import Floor, on_floor
+from study.see.marks import FOUND, located, needs_finding, read as read_floor
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 from study.trust import CANNOT_TELL, FLOOR, Measurements, Trust, exact_warning, for_answer, measurements, path_of
@@ -164,8 +165,8 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
     ``data_dir`` recommends. The scale: ``metres_per_pixel`` if you measured it, else read off ``object_shape`` (by
     default a tennis ball, for the tennis colour only: :data:`BY_COLOUR`) as ``scale_from`` says ('mean': its mean
     apparent size; 'rest'; 'gravity'). ``rest_height``: the centre's height at rest, metres (default: the shape's).
-    ``floor``: a ``FLOOR.csv`` of four or more floor marks (their pixels and positions,
-    ``study.see.floor.read_floor``), or the marks: the camera they give places each frame's centre (no one scale;
+    ``floor``: a ``FLOOR.csv`` of four or more floor marks (their pixels and positions, or only the positions of
+    five or more magenta marks to find in the video: ``study.see.marks.read``), or the marks: the camera they give places each frame's centre (no one scale;
     the size then sets only the rest height). The answer says how far to trust it (``study.trust``). Raises
     ``ModelError`` for a model that does not read heights only, ``ConfigError`` for a track in pixels with nothing to scale it by, ``TrackingError`` / ``GeometryError`` /
     ``VideoError`` naming the file and what to do.
@@ -211,12 +212,17 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
         raise ModelError(f"{which} was trained on {m.dims!r}; one camera gives only the height: use a model trained "
                          "on 'z' (the paper's real-world test does)")
     path = Path(source)
+    found = floor is not None and needs_finding(floor)
+    if found and path.suffix.lower() == ".csv":
+        raise ConfigError(f"{floor.source}: positions only, and {path.name} is a track, not a video: the marks are "
+                          "found in the video; classify the video, or give the marks' pixels (header u,v,x,y)")
+    floor = located(floor, path) if floor is not None else None  # a bad floor before the tracking
     pixels = (track.read_csv(path) if path.suffix.lower() == ".csv" else
               track.track_video(path, track_config or TrackConfig()))  # pixels: scaled once, below
     rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0
     if floor is not None:  # the camera the floor marks give: each frame's own depth
         traj, cal = on_floor(pixels, floor, rest)
-        how = (f"{cal.note()}; each frame's centre from the contacts and the flights between them, the centre "
+        how = (f"{cal.note()}{FOUND if found else ''}; each frame's centre from the contacts and the flights between them, the centre "
                f"{rest:.3f} m up at rest")
     else:
         traj, scale = in_metres(pixels, object_shape, scale_from, metres_per_pixel)

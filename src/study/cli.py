@@ -299,7 +299,8 @@ def _add_object_options(p: argparse.ArgumentParser, tennis_default: bool) -> Non
     p.add_argument("--floor", type=Path, default=None, metavar="FLOOR.csv",
                    help="four or more marks on the floor (five or more recommended): a CSV with the header u,v,x,y, "
                    "one row per mark, its pixel in the video (u right, v down, the top-left pixel's centre at 0,0) "
-                   "and its position on the floor in metres. The camera they give places each frame's centre (its "
+                   "and its position on the floor in metres; or, for marks of magenta paper, the header x,y and "
+                   "their positions only (five or more, laid out with no symmetry): they are found in the video. The camera they give places each frame's centre (its "
                    "contacts on the floor, its flights between them) instead of one scale for the whole video; with "
                    "--manifest, for every clip of the folder (a camera that stood still). Experimental: on rendered "
                    "video its heights are not yet as close as on clean pixels (scripts/floor_sweep.py measures them)")
@@ -316,15 +317,16 @@ def _on_floor(pixels, a: argparse.Namespace):
     """``study track --floor``: the pixel track with heights through the camera the floor marks give; prints what
     the floor says of the camera."""
     from study.core.errors import ConfigError
-    from study.see.floor import on_floor, read_floor
+    from study.see.floor import on_floor
+    from study.see.marks import FOUND, located, needs_finding, read
 
-    marks = read_floor(a.floor)  # before anything else can fail
+    marks = read(a.floor)
     shape = _object_shape(a)
     if shape is None:
         raise ConfigError("--floor: give the object's size (--object-size, and --object-shape) for the height of its "
                           "centre when it lies on the floor")
-    traj, cal = on_floor(pixels, marks, shape.rest_height())
-    print(f"{a.video}: {cal.note()}")
+    traj, cal = on_floor(pixels, located(marks, a.video), shape.rest_height())
+    print(f"{a.video}: {cal.note()}{FOUND if needs_finding(marks) else ''}")
     return traj
 
 
@@ -431,8 +433,9 @@ def _add_render(sub: argparse._SubParsersAction) -> None:
             "Render throws of each class (light and heavy, drawn from the study's priors, a 0.2 m orange box) "
             "into OUT as a phone would film them (640 x 360, 60 frames a second, 3 s): the videos, a "
             "MANIFEST.csv (file, label, color, object_size, object_shape) for 'study classify --manifest', "
-            "and a FLOOR.csv of six floor points at known positions with their pixels (as exact clicks on "
-            "floor marks) for '--floor'; beside each video its ground truth (.csv). About half a minute a "
+            "six magenta floor marks in view, with a FLOOR.csv of their positions and pixels (as exact clicks) "
+            "and a MARKS.csv of their positions only (found in the video) for '--floor'; beside each video its "
+            "ground truth (.csv). About half a minute a "
             "video. Prints the videos and the commands to try on them."
         ),
     )
@@ -454,6 +457,8 @@ def _add_render(sub: argparse._SubParsersAction) -> None:
         print("\n".join(str(v) for v in videos))
         print(f"try: study classify {first} --color {sample.COLOR} --object-size 0.2 --object-shape box "
               f"--floor {a.out / 'FLOOR.csv'}\n"
+              f"     study classify {first} --color {sample.COLOR} --object-size 0.2 --object-shape box "
+              f"--floor {a.out / 'MARKS.csv'}\n"
               f"     study classify {first} --color {sample.COLOR} --object-size 0.2 --object-shape box\n"
               f"     study classify --manifest {a.out / 'MANIFEST.csv'}")
         return 0
