@@ -11,7 +11,7 @@ import pytest
 from study import cli
 from study.core.errors import ConfigError
 from study.methods import marked
-from study.see import floor, marks, render
+from study.see import floor, marklayout, marks, render
 from study.see.camera import Camera
 
 LEVEL_DOWN = (1.0, 0.0, 0.0, 0.0, 0.2924, -0.9563, 0.0, 0.9563, 0.2924)
@@ -37,11 +37,11 @@ def test_find_returns_the_magenta_discs_not_the_floors_light_lines_nor_an_orange
 
 def test_match_pairs_found_pixels_with_their_positions_in_any_order():
     cam = _camera()
-    px = cam.project(np.column_stack([marks.LAYOUT, np.zeros(len(marks.LAYOUT))]))
+    px = cam.project(np.column_stack([marklayout.LAYOUT, np.zeros(len(marklayout.LAYOUT))]))
     order = np.random.default_rng(1).permutation(len(px))
     noisy = px[order] + np.random.default_rng(2).normal(0, 0.5, px.shape)
-    got = marks.match(noisy, marks.LAYOUT, cam.width, cam.height)
-    np.testing.assert_array_equal(got.points, marks.LAYOUT[order])
+    got = marks.match(noisy, marklayout.LAYOUT, cam.width, cam.height)
+    np.testing.assert_array_equal(got.points, marklayout.LAYOUT[order])
     cal = floor.calibrate(got, cam.width, cam.height)
     assert np.linalg.norm(np.subtract(cal.camera.position, cam.position)) < 0.1
 
@@ -52,23 +52,23 @@ def test_a_layout_that_looks_the_same_turned_too_few_marks_or_a_miscount_is_refu
     with pytest.raises(ConfigError, match="look the same turned|looks the same turned"):
         marks.match(px, floor.MARKS, cam.width, cam.height)
     with pytest.raises(ConfigError, match="five or more"):
-        marks.match(px[:4], marks.LAYOUT[:4], cam.width, cam.height)
+        marks.match(px[:4], marklayout.LAYOUT[:4], cam.width, cam.height)
     with pytest.raises(ConfigError, match="5 marks found in the video but 6 positions"):
-        marks.match(px[:5], marks.LAYOUT, cam.width, cam.height)
+        marks.match(px[:5], marklayout.LAYOUT, cam.width, cam.height)
 
 
 def test_a_positions_only_floor_file_is_read_and_a_bad_one_refused_naming_the_line(tmp_path):
     f = tmp_path / "MARKS.csv"
-    f.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in marks.LAYOUT))
+    f.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in marklayout.LAYOUT))
     got = marks.read(f)
-    assert marks.needs_finding(got) and np.array_equal(got.points, marks.LAYOUT)
+    assert marks.needs_finding(got) and np.array_equal(got.points, marklayout.LAYOUT)
     f.write_text("x,y\n0,0\n1,0\n0,1\n1,1\n")
     with pytest.raises(ConfigError, match="MARKS.csv: 4 positions; marks found by their colour need five"):
         marks.read(f)
     f.write_text("x,y\n0,0\n1,zero\n")
     with pytest.raises(ConfigError, match="MARKS.csv, line 3: '1,zero' is not two numbers"):
         marks.read(f)
-    f.write_text("u,v,x,y\n" + "".join(f"{10 * i},{5 * i * i},{x},{y}\n" for i, (x, y) in enumerate(marks.LAYOUT)))
+    f.write_text("u,v,x,y\n" + "".join(f"{10 * i},{5 * i * i},{x},{y}\n" for i, (x, y) in enumerate(marklayout.LAYOUT)))
     assert not marks.needs_finding(marks.read(f))  # pixels given: read as FLOOR.csv
 
 
@@ -79,10 +79,11 @@ def test_marks_in_the_scene_leave_the_throw_bitwise_unchanged():
     cfg = synth.SynthConfig.preset("smoke").replace(n_test=2)
     params = synth.sample_split(cfg, 7, "test")
     model, qpos, qvel = videos.throw(cfg, params, 0)
-    dressed = marked.with_marks(marked.throw_xml(cfg, params, 0), marks.LAYOUT)
-    assert dressed.ngeom == model.ngeom + len(marks.LAYOUT)
+    dressed = marked.with_marks(marked.throw_xml(cfg, params, 0), marklayout.LAYOUT)
+    assert dressed.ngeom == model.ngeom + len(marklayout.LAYOUT)
     steps = round(1.5 / model.opt.timestep)
-    np.testing.assert_array_equal(render.simulate(dressed, qpos, qvel, steps), render.simulate(model, qpos, qvel, steps))
+    np.testing.assert_array_equal(render.simulate(dressed, qpos, qvel, steps),
+                                  render.simulate(model, qpos, qvel, steps))
 
 
 @pytest.mark.slow
@@ -96,11 +97,11 @@ def test_study_track_and_classify_find_the_marks_in_a_rendered_clip(tmp_path, ca
 
     xml = scene_xml(Shape(), stiffness=render.STIFFNESS, timestep=render.TIMESTEP, rgba=render.OBJECT_RGBA,
                     sleep_tolerance=render.SLEEP_TOLERANCE, **render.CLASS_PARAMS["light"])  # render.class_model's
-    model = marked.with_marks(xml, marks.LAYOUT)
+    model = marked.with_marks(xml, marklayout.LAYOUT)
     qpos, qvel = render.initial_state((-1.0, 0.0, 0.8), (2.0, 0.0, 1.0))
     cfg = render.RenderConfig(width=480, height=270, duration=1.0, noise_std=2.0, jpeg_quality=85, shadows=False)
     clip = render.render(model, qpos, qvel, tmp_path / "throw.mp4", cfg)
-    (tmp_path / "MARKS.csv").write_text("x,y\n" + "".join(f"{x:g},{y:g}\n" for x, y in marks.LAYOUT))
+    (tmp_path / "MARKS.csv").write_text("x,y\n" + "".join(f"{x:g},{y:g}\n" for x, y in marklayout.LAYOUT))
     rc = cli.main(["track", str(clip.video), "--color", "orange", "--object-size", "0.2", "--object-shape", "box",
                    "--floor", str(tmp_path / "MARKS.csv"), "--no-progress"])
     said = capsys.readouterr().out

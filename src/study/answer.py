@@ -24,7 +24,7 @@ from study.runs import measured, recommended
 from study.see import track
 from study.see.config import TrackConfig
 from study.see.floor import Floor, on_floor
-from study.see.marks import FOUND, located, needs_finding, read as read_floor
+from study.see.marks import FOUND, PATH_KEY as FOUND_PATH, located, needs_finding, read as read_floor
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 from study.trust import CANNOT_TELL, FLOOR, Measurements, Trust, exact_warning, for_answer, measurements, path_of
@@ -129,7 +129,8 @@ class _Model:
     def band_for(self, route: str) -> tuple[float, float] | None:
         """Its cannot-tell band where the answer's heights came by the path it was recommended for (``route``:
         ``trust.path_of``), else None."""
-        served = recommended.FLOOR if route == FLOOR else recommended.ONE_SCALE if route in SCALE_FROM else None
+        served = (recommended.FLOOR if route in (FLOOR, FOUND_PATH) else recommended.ONE_SCALE if route in SCALE_FROM
+                  else None)
         return self.band if served is not None and served == self.recommended_for else None
 
 
@@ -222,7 +223,8 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
     rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0
     if floor is not None:  # the camera the floor marks give: each frame's own depth
         traj, cal = on_floor(pixels, floor, rest)
-        how = (f"{cal.note()}{FOUND if found else ''}; each frame's centre from the contacts and the flights between them, the centre "
+        how = (f"{cal.note()}{FOUND if found else ''}; each frame's centre from the contacts and the flights between "
+               "them, the centre "
                f"{rest:.3f} m up at rest")
     else:
         traj, scale = in_metres(pixels, object_shape, scale_from, metres_per_pixel)
@@ -230,7 +232,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
                f"(the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m up at rest")
     x = track.to_model_input(traj, m.fps, m.n_frames, rest_height=rest)
     p_heavy = float(m.predict_proba(x[None])[0, 1])
-    route = path_of(floor is not None, scale_from, metres_per_pixel)  # how the heights were had
+    route = path_of(floor is not None, scale_from, metres_per_pixel, found)  # how the heights were had
     trust = for_answer(got.kind, route, got.seen, got.band_for(route))
     piece = traj.longest()
     members = m.members if isinstance(m, Ensemble) else (m,)

@@ -25,8 +25,8 @@ from study.methods.floor_model import FloorFit
 from study.methods.recommend import Recommendation, kind, recommend
 from study.report.reported import count, number
 from study.report.text import Table, pct, pct_ci, points
-from study.report.usercamera import Numbers, PathKey, Sweep, SweepGroup, SweepPath
-from study.see import floor, paths
+from study.report.usercamera import Numbers, Sweep, SweepGroup, SweepKey, SweepPath
+from study.see import marklayout, marks, paths
 from study.simulate import measure
 from study.simulate.observe import CAMERA_FAMILIES
 
@@ -37,8 +37,8 @@ if TYPE_CHECKING:
 # ---------------------------------------------------------------------------------------------
 # The camera sweep: a camera nobody measured (study.methods.sweep, study.methods.camera_cost)
 
-PATH_KEYS: dict[str, PathKey] = {paths.EXACT: paths.EXACT, paths.KNOWN_WORDS: paths.KNOWN,
-                                  **{p.words: p.key for p in paths.PATHS}}
+PATH_KEYS: dict[str, SweepKey] = {paths.EXACT: paths.EXACT, paths.KNOWN_WORDS: paths.KNOWN,
+                                  **{p.words: p.key for p in paths.PATHS}, marks.PATH_WORDS: marks.PATH_KEY}
 """Each path's name in the tables -> its key in the results file."""
 
 
@@ -262,8 +262,14 @@ class UserCamera:
         res = self.camera.recommended.results["all"]
         fl, default = res[camera_cost.FLOOR_PATH], res[camera_cost.DEFAULT_PATH]
         mm = "no heights" if math.isnan(fl.rms_centred_mm) else f"{fl.rms_centred_mm:.0f} mm off"
-        words = (f"with {len(floor.MARKS)} marks taped around the throw, the heights are {mm} (one "
-                 f"scale: {default.rms_centred_mm:.0f} mm) and the recommended model labels {pct_ci(fl.accuracy)} "
+        found = res.get(camera_cost.FOUND)
+        found_mm = ("" if found is None else "; found by their colour rather than clicked, "
+                    + ("none gave heights" if math.isnan(found.rms_centred_mm) else
+                       f"{found.rms_centred_mm:.0f} mm" + (f", {found.no_heights} clips without heights"
+                                                           if found.no_heights else "")))
+        words = (f"with {len(marklayout.LAYOUT)} marks taped around the throw, the heights are {mm} (one "
+                 f"scale: {default.rms_centred_mm:.0f} mm{found_mm}) and the recommended model labels "
+                 f"{pct_ci(fl.accuracy)} "
                  f"right ({pct_ci(default.accuracy)} with one scale)")
         name = self.camera.floor_choice
         if name is None:

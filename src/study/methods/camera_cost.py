@@ -11,9 +11,11 @@ A path reads only the video and what a user knows (the object's colour, shape an
   at the lowest centre position;
 - ``geometry``: the camera's tilt, height and focal length fitted with gravity as the ruler
   (``study.see.geometry.recover``);
-- ``floor marks``: the camera from marks a user taped on the floor around the throw (``study.see.floor.MARKS``,
-  their pixels as a careful click gives them: the camera's projection plus :data:`CLICK_PX` of noise; no re-render), then
-  each frame's centre through it (``study.see.floor``: ``study classify --floor``).
+- ``floor marks``: the camera from marks a user taped on the floor around the throw (``study.see.marklayout.LAYOUT``
+  about its middle, their pixels as a careful click gives them: the camera's projection plus :data:`CLICK_PX` of
+  noise), then each frame's centre through it (``study.see.floor``: ``study classify --floor FLOOR.csv``);
+- ``floor marks found`` (beside, where the marks were drawn: the sweep's clips): the same with the marks' pixels
+  found in the video by their colour (``study.see.marks``: ``study classify --floor MARKS.csv``).
 
 The exact path classifies the renderer's true heights: the camera's cost is the exact path's accuracy minus a
 user path's, on the same clips and seeds (a paired bootstrap). A clip a path cannot turn into heights (the object
@@ -36,7 +38,7 @@ from study.methods import sweep
 from study.methods.sweep import Clip
 from study.methods.videos import Video
 from study.runs.stats import correct_of
-from study.see import floor, geometry, paths, render, track
+from study.see import floor, geometry, marklayout, marks, paths, render, track
 from study.see.camera import Camera
 from study.see.gaps import set_camera, set_scale
 from study.see.scale import DEFAULT, ObjectShape, read_scale
@@ -48,8 +50,11 @@ PATHS: tuple[str, ...] = tuple(p.words for p in paths.PATHS)
 KNOWN = paths.KNOWN_WORDS
 """The tracker's pixels through the clip's own camera at each frame's true depth (``study.see.gaps.set_camera``):
 what a path that knows the camera, as the floor path does, could reach at best; measured where the camera is known."""
-MEASURED: tuple[str, ...] = (KNOWN, *PATHS)
-"""Every way a clip's tracked pixels become heights: the known camera's, then the user's paths."""
+FOUND = marks.PATH_WORDS
+"""The floor path with its marks found in the video by their colour: measured on clips whose marks were drawn."""
+MEASURED: tuple[str, ...] = (KNOWN, *PATHS, FOUND)
+"""Every way a clip's tracked pixels become heights: the known camera's, the user's paths, the floor path with its
+marks found."""
 FLOOR_PATH = next(p.words for p in paths.PATHS if p.key == "floor")
 """The path through floor marks (it needs the clip's camera to place the marks)."""
 CLICK_PX = 1.0
@@ -102,23 +107,31 @@ def heights(clip: Clip, shape: ObjectShape) -> Heights:
     """Track ``clip`` once (pixels) and turn it into heights through the clip's own camera (:data:`KNOWN`) and by
     every path of :data:`PATHS`, for an object of ``shape`` (the floor path through marks placed by the clip's
     camera)."""
-    return video_heights(clip.video, shape, lambda world: sweep.camera(clip.shot, world))
+    return video_heights(clip.video, shape, lambda world: sweep.camera(clip.shot, world), drawn=True)
 
 
 def clicked_floor(camera: Camera, path: np.ndarray, name: str) -> floor.Floor:
     """The floor marks a user would tape about a throw whose centre follows ``path`` (n, 3) metres
-    (``study.see.floor.MARKS`` about its middle) as ``camera`` sees them and a careful click gives them
-    (:data:`CLICK_PX` of noise, seeded by the clip's ``name``): those in the picture."""
-    xy = path[:, :2].mean(axis=0) + floor.MARKS
-    return floor.seen(camera, xy, CLICK_PX, zlib.crc32(name.encode()), name)
+    (``study.methods.sweep.marks_about``) as ``camera`` sees them and a careful click gives them (:data:`CLICK_PX` of
+    noise, seeded by the clip's ``name``): those in the picture."""
+    return floor.seen(camera, sweep.marks_about(path), CLICK_PX, zlib.crc32(name.encode()), name)
 
 
-def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], Camera] | None = None) -> Heights:
+def found_floor(v: Video, path: np.ndarray) -> floor.Floor:
+    """The floor marks drawn about a throw whose centre follows ``path`` (n, 3) metres (``sweep.marks_about``),
+    their pixels found in the video ``v`` by their colour and paired with their positions (``study.see.marks``)."""
+    return marks.located(floor.Floor(np.full((len(marklayout.LAYOUT), 2), np.nan), sweep.marks_about(path),
+                                     v.path.name), v.path)
+
+
+def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], Camera] | None = None,
+                  drawn: bool = False) -> Heights:
     """:func:`heights` of any rendered video (one with ground truth); the floor path only where ``camera`` gives
-    the video's camera from its true centres (n, 3) metres (the sweep's depends on the throw)."""
+    the video's camera from its true centres (n, 3) metres (the sweep's depends on the throw), with its marks found
+    by colour only where they were ``drawn`` (``study.methods.marked``)."""
     truth = render.read_truth(v.truth)
     world = np.column_stack([truth["x"], truth["y"], truth["z"]])
-    marks = None if camera is None else clicked_floor(camera(world), world, v.path.name)
+    clicked = None if camera is None else clicked_floor(camera(world), world, v.path.name)
     rest = v.rest_height
     exact = truth["z"] - rest
     paths: dict[str, np.ndarray | str] = {}
@@ -141,15 +154,23 @@ def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], C
         try:
             if name != FLOOR_PATH:
                 t = SCALE[name](px, shape)
-            elif marks is None:
+            elif clicked is None:
                 raise ConfigError("no floor marks: the video's camera is not known")
             else:
-                t, _ = floor.on_floor(px, marks, rest)
+                t, _ = floor.on_floor(px, clicked, rest)
         except StudyError as e:
             paths[name] = str(e)
             continue
         tracks[name] = t
         paths[name] = _padded(np.where(t.status > 0, t.height, np.nan), len(exact))
+    try:
+        if not drawn:
+            raise ConfigError("no floor marks drawn in the video")
+        t, _ = floor.on_floor(px, found_floor(v, world), rest)
+        tracks[FOUND] = t
+        paths[FOUND] = _padded(np.where(t.status > 0, t.height, np.nan), len(exact))
+    except StudyError as e:
+        paths[FOUND] = str(e)
     return Heights(exact, paths, tracks)
 
 
@@ -231,7 +252,7 @@ def floors(clips: Sequence[Clip], tracked: Sequence[Heights]) -> dict[str, Floor
     return {g: Floor(*np.sqrt(np.mean(np.square(r), axis=0)).tolist(), len(r)) for g, r in rows.items()}
 
 
-def _errors(h: Heights, path: str) -> np.ndarray:
+def path_errors(h: Heights, path: str) -> np.ndarray:
     """(frames,) one video's height error by ``path`` on every frame it has a height for, metres."""
     got = h.paths.get(path, "not measured")
     return np.array([]) if isinstance(got, str) else (got - h.exact)[np.isfinite(got)]
@@ -250,7 +271,7 @@ def rms_mm(errors: Sequence[np.ndarray]) -> tuple[float, float]:
 def height_errors(tracked: Sequence[Heights]) -> dict[str, tuple[float, float]]:
     """Each path's height error over ``tracked`` videos (and the known camera's, where measured): path ->
     :func:`rms_mm` (raw, median removed), mm."""
-    return {k: rms_mm([_errors(h, k) for h in tracked]) for k in MEASURED if any(k in h.paths for h in tracked)}
+    return {k: rms_mm([path_errors(h, k) for h in tracked]) for k in MEASURED if any(k in h.paths for h in tracked)}
 
 
 @dataclass(frozen=True)
@@ -326,7 +347,7 @@ def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]
     x, missing = read if read is not None else inputs(clips, tracked, first.fps, first.n_frames)
     y = np.array([c.video.label == "heavy" for c in clips])
     correct = {k: correct_of(members, xk, y) & ~missing[k] for k, xk in x.items()}
-    errors = {"exact": [np.zeros(1)] * len(clips), **{k: [_errors(h, k) for h in tracked] for k in MEASURED}}
+    errors = {"exact": [np.zeros(1)] * len(clips), **{k: [path_errors(h, k) for h in tracked] for k in MEASURED}}
     groups = tuple(groups_of(c) for c in clips)
     out: dict[str, dict[str, PathResult]] = {}
     sizes = sorted({gs[2] for gs in groups}, key=lambda r: int(r[:-1]))  # by frame height

@@ -8,7 +8,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from study.see.marks import MARK_DIAMETER, MARK_RGBA
+from study.see.marklayout import MARK_DIAMETER, MARK_RGBA
 from study.simulate.scene import scene_xml
 
 THICKNESS = 0.001

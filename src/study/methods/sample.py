@@ -1,7 +1,7 @@
 """Sample clips for a user to try the video path on (``study render``): throws of each class drawn from the study's
 priors and rendered as the book renders them, with everything a user's own folder would hold — the videos, a
 ``MANIFEST.csv`` (file, label, colour, size and shape), and floor marks in view (magenta discs at
-``study.see.marks.LAYOUT``) for ``study classify --floor``: ``FLOOR.csv`` gives their positions with their pixels
+``study.see.marklayout.LAYOUT``) for ``study classify --floor``: ``FLOOR.csv`` gives their positions with their pixels
 through the renderer's camera (as exact clicks), ``MARKS.csv`` their positions only (the marks found in the video);
 and, beside each video, its ground truth (``study.see.render``'s CSV).
 """
@@ -18,7 +18,7 @@ from study.core.errors import ConfigError, check_writable
 from study.core.progress import Progress
 from study.methods.marked import throw_xml, with_marks
 from study.methods.videos import throw
-from study.see import floor, marks, render
+from study.see import floor, marklayout, render
 from study.see.camera import Camera
 from study.simulate import synth
 
@@ -36,9 +36,9 @@ def render_config(seed: int = SEED) -> render.RenderConfig:
                                jpeg_quality=85, shadows=True, seed=seed)
 
 
-def floor_rows(camera: Camera, points: np.ndarray = marks.LAYOUT) -> list[tuple[float, float, float, float]]:
+def floor_rows(camera: Camera, points: np.ndarray = marklayout.LAYOUT) -> list[tuple[float, float, float, float]]:
     """The ``FLOOR.csv`` rows ``(u, v, x, y)`` of the floor points ``points`` (n, 2) metres (by default the marks the
-    samples show, ``study.see.marks.LAYOUT``, about the middle of the throws' path) that ``camera`` sees inside its
+    samples show, ``study.see.marklayout.LAYOUT``, about the middle of the throws' path) that ``camera`` sees inside its
     image, exact; :class:`ConfigError` when fewer than four are in view."""
     marked = floor.seen(camera, points)
     if len(marked.points) < floor.MIN_MARKS:
@@ -65,7 +65,7 @@ def write(out_dir: str | Path, per_class: int = 1, seed: int = SEED, progress: b
             label = CLASSES[int(params["label"][i])]
             video = out / f"{label}_{sum(CLASSES[int(c)] == label for c in params['label'][:i]):03d}.mp4"
             _, qpos, qvel = throw(cfg, params, i)
-            model = with_marks(throw_xml(cfg, params, i), marks.LAYOUT)  # the same throw, the marks drawn
+            model = with_marks(throw_xml(cfg, params, i), marklayout.LAYOUT)  # the same throw, the marks drawn
             render.render(model, qpos, qvel, video, rcfg)
             videos.append(video)
             rows.append(f"{video.name},{label},{COLOR},{edge:g},{kind}\n")
@@ -73,7 +73,7 @@ def write(out_dir: str | Path, per_class: int = 1, seed: int = SEED, progress: b
     camera = render.scene_camera(model, rcfg.camera, rcfg.width, rcfg.height)
     write_text_atomic(out / "FLOOR.csv", "u,v,x,y\n" + "".join(f"{u:.2f},{v:.2f},{x:g},{y:g}\n"
                                                              for u, v, x, y in floor_rows(camera)))
-    write_text_atomic(out / "MARKS.csv", "x,y\n" + "".join(f"{x:g},{y:g}\n" for x, y in marks.LAYOUT))
+    write_text_atomic(out / "MARKS.csv", "x,y\n" + "".join(f"{x:g},{y:g}\n" for x, y in marklayout.LAYOUT))
     write_text_atomic(out / "MANIFEST.csv", "file,label,color,object_size,object_shape\n" + "".join(rows))
     return videos
 

@@ -4,9 +4,11 @@ leaves of the heights and of the answer.
 Each clip is one throw of the study's priors (the test split of a seed no training set uses, launched across the
 view as the book's renders are: ``study.methods.videos.throw``) rendered through a :class:`Shot`: a camera placed
 at a random height, distance, yaw and tilt, with a random field of view, frame size and rate, floor, light and
-object colour, drawn from one of the :data:`FAMILIES`. A shot is kept only if the object stays in the picture and
-at least :data:`MIN_PIXELS` pixels wide for the whole clip (checked on the simulated path before anything is
-rendered). Clips are cached under ``out_dir/sweep-<key>/`` by a key of everything that determines them, this
+object colour, drawn from one of the :data:`FAMILIES`. Six magenta floor marks lie about the throw's middle
+(``study.see.marklayout.LAYOUT``, drawn by ``study.methods.marked``: the throw is bitwise the same), for the floor
+path's clicks and for finding them by colour. A shot is kept only if the object stays in the picture and at least
+:data:`MIN_PIXELS` pixels wide for the whole clip, and every mark is in the picture (checked on the simulated path
+before anything is rendered). Clips are cached under ``out_dir/sweep-<key>/`` by a key of everything that determines them, this
 module's code and the renderer's included, with a ``MANIFEST.csv`` (file, label, family, colour, object size) and,
 beside each video, the renderer's ground truth (``study.see.render``).
 
@@ -16,6 +18,7 @@ beside each video, the renderer's ground truth (``study.see.render``).
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 import math
 import time
 from dataclasses import asdict, dataclass, replace
@@ -27,8 +30,8 @@ import numpy as np
 from study import CLASSES
 from study.core import cache
 from study.core.progress import Progress
-from study.methods import videos
-from study.see import render
+from study.methods import marked, videos
+from study.see import marklayout, render
 from study.see.camera import Camera
 from study.see.size import apparent_size
 from study.simulate.observe import CAMERA_FAMILIES, CameraFamily
@@ -131,6 +134,24 @@ def visible(cam: Camera, path: np.ndarray, size: float) -> bool:
     return bool(inside.all() and (cam.focal * size / depth >= MIN_PIXELS).all())
 
 
+def marks_about(path: np.ndarray) -> np.ndarray:
+    """(k, 2) metres: where the floor marks lie for a throw whose centre follows ``path`` (n, 3) metres at the
+    clip's frame times (its truth CSV's rows): ``study.see.marklayout.LAYOUT`` about the path's middle on the floor."""
+    return np.asarray(path, np.float64)[:, :2].mean(axis=0) + marklayout.LAYOUT
+
+
+def marks_visible(cam: Camera, points: np.ndarray, margin: float = 0.02) -> bool:
+    """Whether every floor point ``points`` (k, 2) metres lies in front of ``cam`` and inside its picture, at least
+    ``margin`` of the frame's width and height from its edges."""
+    ground = np.column_stack([points, np.zeros(len(points))])
+    if not (cam.depth_of(ground) > 0.3).all():
+        return False
+    uv = cam.project(ground)
+    du, dv = margin * cam.width, margin * cam.height
+    return bool(((uv[:, 0] > du) & (uv[:, 0] < cam.width - 1 - du) & (uv[:, 1] > dv)
+                 & (uv[:, 1] < cam.height - 1 - dv)).all())
+
+
 def dress(model: mujoco.MjModel, shot: Shot, cam: Camera) -> None:
     """Put ``cam`` into ``model``'s 'side' camera (pose and field of view) and paint the object, floor and light
     as ``shot`` says, in place."""
@@ -172,7 +193,7 @@ def sweep_set(cfg, per_family: int, seed: int, out_dir: str | Path, progress: bo
     size = _object_size(cfg)
     rng = np.random.default_rng(seed)
     queues = [list(np.flatnonzero(params["label"] == k)) for k in range(len(CLASSES))]  # throws of each class
-    plan: list[tuple[int, Shot, Camera]] = []
+    plan: list[tuple[int, Shot, Camera, np.ndarray]] = []
     for family in FAMILIES:
         for k in range(per_family):
             queue = queues[k % len(CLASSES)]  # the classes alternate within a family
@@ -180,23 +201,26 @@ def sweep_set(cfg, per_family: int, seed: int, out_dir: str | Path, progress: bo
                 i = int(queue.pop(0))
                 model, qpos, qvel = videos.throw(cfg, params, i)
                 path = render.simulate(model, qpos, qvel, round(duration / model.opt.timestep))[:, :3]
-                shot = _keep(family, path, size, rng, max_draws, frame_scale)
+                shot = _keep(family, lambda fps: at_frames(model, path, fps, duration), size, rng, max_draws,
+                             frame_scale)
                 if shot is not None:
                     plan.append((i, *shot))
                     break
     clips = []
-    for i, shot, cam in plan:
+    for i, shot, _, _ in plan:
         label = CLASSES[int(params["label"][i])]
         name = f"{shot.family}_{len(clips):03d}_{label}.mp4"
         v = videos.Video(folder / name, label, color=shot.colour, object_size=size, rest_height=cfg.shape.rest_height,
                          truth=(folder / name).with_suffix(".csv"), info={"family": shot.family, **asdict(shot)})
         clips.append(Clip(v, shot))
-    todo = [(c, i, cam) for c, (i, _, cam) in zip(clips, plan) if not (c.video.path.is_file() and c.video.truth.is_file())]
+    todo = [(c, i, cam, xy) for c, (i, _, cam, xy) in zip(clips, plan)
+            if not (c.video.path.is_file() and c.video.truth.is_file())]
     times = _read_times(folder)
     with Progress("render the camera sweep", total=len(todo), show=progress, unit="clip") as bar:
-        for c, i, cam in todo:
+        for c, i, cam, xy in todo:
             cpu, wall = time.process_time(), time.perf_counter()
-            model, qpos, qvel = videos.throw(cfg, params, i)
+            _, qpos, qvel = videos.throw(cfg, params, i)
+            model = marked.with_marks(marked.throw_xml(cfg, params, i), xy)  # the same throw, its marks drawn
             dress(model, c.shot, cam)
             rcfg = render.RenderConfig(width=c.shot.width, height=c.shot.height_px, fps=c.shot.fps, duration=duration,
                                        blur_subframes=2, noise_std=2.0, jpeg_quality=85, seed=seed + i)
@@ -230,17 +254,27 @@ def _read_times(folder: Path) -> dict[str, dict[str, float]]:
     return got if isinstance(got, dict) else {}
 
 
-def _keep(family: str, path: np.ndarray, size: float, rng: np.random.Generator, max_draws: int,
-          frame_scale: float) -> tuple[Shot, Camera] | None:
-    """The first of up to ``max_draws`` shots of ``family`` that keeps ``path`` :func:`visible`, or None."""
+def at_frames(model: mujoco.MjModel, path: np.ndarray, fps: float, duration: float) -> np.ndarray:
+    """(n, 3) the centres ``path`` (one row a simulation step, the first the launch) at a clip's frame times: the
+    rows its truth CSV holds (``study.see.render.render``), so the camera and the marks placed about them here are
+    the ones the camera cost places about the truth."""
+    return path[:: render.steps_per_frame(model, fps)][: round(duration * fps)]
+
+
+def _keep(family: str, frames_at: Callable[[float], np.ndarray], size: float, rng: np.random.Generator,
+          max_draws: int, frame_scale: float) -> tuple[Shot, Camera, np.ndarray] | None:
+    """The first of up to ``max_draws`` shots of ``family`` that keeps the throw (``frames_at(fps)``: its centres at
+    the frame times, (n, 3) metres) :func:`visible` and the floor marks about it in the picture
+    (:func:`marks_visible`), with its camera and the marks' positions (k, 2) metres; or None."""
     for _ in range(max_draws):
         shot = draw_shot(family, rng)
         if frame_scale != 1.0:
             shot = replace(shot, width=max(16, round(shot.width * frame_scale)),
                            height_px=max(16, round(shot.height_px * frame_scale)))
-        cam = camera(shot, path)
-        if visible(cam, path, size):
-            return shot, cam
+        path = frames_at(shot.fps)
+        cam, xy = camera(shot, path), marks_about(path)
+        if visible(cam, path, size) and marks_visible(cam, xy):
+            return shot, cam, xy
     return None
 
 

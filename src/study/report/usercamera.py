@@ -6,12 +6,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from collections.abc import Mapping
-from typing import Literal
+from typing import Literal, get_args
 
 from study.learn.metrics import Interval
 from study.report.reported import Leaf, Number, Reported, named
+from study.see.marks import PATH_KEY as FOUND
 from study.see.paths import PathKey  # the paths are defined once, there
 from study.simulate.observe import CAMERA_FAMILIES
+
+SweepKey = Literal[(*get_args(PathKey), FOUND)]  # type: ignore[valid-type]
+"""How the sweep's heights were had: a :data:`PathKey`, or the floor path with its marks found by colour."""
 
 Family = Literal[("all", *(f.key for f in CAMERA_FAMILIES))]  # type: ignore[valid-type]
 """The camera sweep's clips pooled, or one camera family (``study.simulate.observe.CAMERA_FAMILIES``)."""
@@ -38,7 +42,7 @@ class SweepGroup(Reported):
     """Clips in the group."""
     floor_mm: Number
     """The least height error any one-scale path can reach on them, millimetres RMS (true image rows)."""
-    paths: dict[PathKey, SweepPath] = named("")
+    paths: dict[SweepKey, SweepPath] = named("")
     """Each path, by name."""
 
 
@@ -49,13 +53,13 @@ class Sweep(Reported):
     groups: dict[str, SweepGroup] = named("")
     """All clips (``all``), each camera family (:data:`Family`) and each frame height (``480p``, ``720p``: the sweep's
     ``SIZES``, ``study.methods.camera_cost.groups_of``)."""
-    drag: dict[PathKey, Number] = named("drag")
+    drag: dict[SweepKey, Number] = named("drag")
     """The drag rule's accuracy on the clips, by path."""
     size_error: Number | None = None
     """Median relative error of one frame's blob diameter against the object's true apparent size."""
     render_cpu_s: Number | None = None
     """CPU seconds the clips took to render, as recorded when they were made (None: not recorded)."""
-    kinds: dict[str, dict[PathKey, Number]] = named("kind", default_factory=dict)
+    kinds: dict[str, dict[SweepKey, Number]] = named("kind", default_factory=dict)
     """Every candidate, by its kind (``study.runs.measured.kind``): its accuracy on all clips, exact heights and
     by each path (what an answer quotes for a model of that kind)."""
 

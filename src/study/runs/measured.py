@@ -24,7 +24,7 @@ SHIPPED_FORMAT = "study.measured/1"
 
 Measured = Mapping[str, Mapping[str, Interval]]
 """Kind of model (:func:`kind`) -> how the heights were had (``exact`` or a path's key,
-``study.see.paths.PathKey``) -> its accuracy on the camera sweep's clips, pooled, with its interval."""
+``study.report.usercamera.SweepKey``) -> its accuracy on the camera sweep's clips, pooled, with its interval."""
 
 
 def kind(cfg: TrainConfig) -> str:

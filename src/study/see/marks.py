@@ -7,7 +7,7 @@ from the per-pixel median of a few frames spread over the clip, so an object pas
 :func:`match` pairs the found pixels with the positions: every assignment's homography is fitted, the one whose
 pixels it reproduces best is kept, and a layout that another assignment fits about as well (a rectangle's corners
 alone: turned half round, it is the same rectangle, seen by a camera on the other side) is refused, since nothing in
-the image tells the two apart; an irregular layout (:data:`LAYOUT`) has one answer.
+the image tells the two apart; an irregular layout (``study.see.marklayout.LAYOUT``) has one answer.
 """
 
 from __future__ import annotations
@@ -22,19 +22,9 @@ import numpy as np
 from study.core.errors import ConfigError, DataError
 from study.see.floor import MIN_MARKS, Floor, check_spread
 from study.see.ground import camera_from_floor
+from study.see.marklayout import MARK_HSV
 from study.see.video import open_video
 
-MARK_HSV: tuple[tuple[int, int, int], tuple[int, int, int]] = ((140, 90, 60), (170, 255, 255))
-"""The marks' colour range, HSV on OpenCV's scale (H 0-179): magenta, clear of every object colour the tracker
-knows (``study.see.config.COLORS``: red wraps 170-8) and of grey, white and wood floors (low saturation)."""
-MARK_RGBA = (0.8, 0.1, 0.7, 1.0)
-"""The paint the renders give the marks (hue about 152 of 180 on OpenCV's scale)."""
-MARK_DIAMETER = 0.15
-"""Metres: the rendered marks' size, a disc of paper a user can lay flat (seen from 0.6 m up at 4 m it is about
-20 x 4 pixels at 640 x 360)."""
-LAYOUT = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [-0.5, -0.75], [0.25, 0.75]])
-"""Metres on the floor about the throw's middle: a 2 m x 1.5 m rectangle's corners and one mark on each long side,
-off their middles so that no turn or mirror of the layout is the layout (:func:`match` needs that)."""
 MIN_AREA = 6
 """Pixels: a smaller blob is noise, not a mark."""
 MAX_MARKS = 8
@@ -46,6 +36,11 @@ FRAMES = 9
 """Frames whose per-pixel median :func:`find_in_video` reads."""
 FOUND = " (the marks found in the video by their magenta)"
 """What an answer adds to the camera's note when :func:`located` found the marks."""
+PATH_KEY = "found"
+"""The results' key of the floor path with its marks found by colour (``study classify --floor MARKS.csv``), beside
+``study.see.paths``' keys (the floor path's own, ``floor``, is the marks clicked)."""
+PATH_WORDS = "floor marks found"
+"""What the book calls :data:`PATH_KEY`."""
 
 
 def find(bgr: np.ndarray, hsv: tuple[tuple[int, int, int], tuple[int, int, int]] = MARK_HSV) -> np.ndarray:
