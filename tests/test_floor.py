@@ -12,6 +12,8 @@ from study.methods import sweep
 from study.see import floor
 from study.see.geometry import G
 
+RECTANGLE = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])
+"""Floor marks about the throw's middle, metres: a 2 m x 1.5 m rectangle's corners and its long sides' middles."""
 REST = 0.1
 
 
@@ -51,7 +53,7 @@ def marks(cam, path: np.ndarray, noise: float, k: int = 6, seed: int = 0) -> flo
     """``k`` floor marks around the throw (a 2 m x 1.5 m rectangle's corners, then points on its sides), their pixels
     as a careful click gives them: the exact projection plus ``noise`` pixels."""
     mid = path[:, :2].mean(axis=0)
-    return floor.seen(cam, floor.MARKS[:k] + mid, noise, seed)
+    return floor.seen(cam, RECTANGLE[:k] + mid, noise, seed)
 
 
 @pytest.mark.parametrize("height, tilt, yaw", [(1.0, 5.0, 0.0), (1.7, 30.0, -45.0), (2.0, 40.0, 30.0),

@@ -14,6 +14,8 @@ from study.methods import marked
 from study.see import floor, marklayout, marks, render
 from study.see.camera import Camera
 
+RECTANGLE = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])
+"""A symmetric layout: a rectangle's corners and its long sides' middles (turned half round, it is itself)."""
 LEVEL_DOWN = (1.0, 0.0, 0.0, 0.0, 0.2924, -0.9563, 0.0, 0.9563, 0.2924)
 """Camera axes as columns (right, up, back): it looks along +y, tilted about 17 degrees down."""
 
@@ -48,9 +50,9 @@ def test_match_pairs_found_pixels_with_their_positions_in_any_order():
 
 def test_a_layout_that_looks_the_same_turned_too_few_marks_or_a_miscount_is_refused():
     cam = _camera()
-    px = cam.project(np.column_stack([floor.MARKS, np.zeros(len(floor.MARKS))]))  # a rectangle and its middles
+    px = cam.project(np.column_stack([RECTANGLE, np.zeros(len(RECTANGLE))]))  # a rectangle and its middles
     with pytest.raises(ConfigError, match="look the same turned|looks the same turned"):
-        marks.match(px, floor.MARKS, cam.width, cam.height)
+        marks.match(px, RECTANGLE, cam.width, cam.height)
     with pytest.raises(ConfigError, match="five or more"):
         marks.match(px[:4], marklayout.LAYOUT[:4], cam.width, cam.height)
     with pytest.raises(ConfigError, match="5 marks found in the video but 6 positions"):

@@ -16,7 +16,7 @@ from study import cli
 from study.chapters import realworld
 from study.core.errors import ConfigError, TrackingError, VideoError
 from study.learn import train
-from study.see import floor, render, scale, track, video
+from study.see import marklayout, render, scale, track, video
 from study.see.scale import ObjectShape
 from study.simulate import measure
 
@@ -389,12 +389,12 @@ def test_sample_floor_points_are_those_the_camera_sees_and_four_are_needed():
     cam = Camera((0.0, -4.0, 1.2), level, 400.0, 640, 360)
     assert cam.depth_of(np.zeros((1, 3)))[0] == pytest.approx(4.0), "the floor's middle is in front of it"
     rows = sample.floor_rows(cam)
-    assert 4 <= len(rows) <= len(floor.MARKS)
+    assert 4 <= len(rows) <= len(marklayout.LAYOUT)
     assert all(0 <= u <= 639 and 0 <= v <= 359 for u, v, _, _ in rows)
     np.testing.assert_allclose(cam.project(np.array([[x, y, 0.0] for _, _, x, y in rows])),
                                np.array([[u, v] for u, v, _, _ in rows]), atol=1e-9)
     with pytest.raises(ConfigError, match="in the camera's view; need four"):
-        sample.floor_rows(cam, floor.MARKS + 50.0)
+        sample.floor_rows(cam, marklayout.LAYOUT + 50.0)
 
 
 def test_the_overlay_joins_found_frames_within_a_piece_never_across_a_filled_gap_or_a_jump(tmp_path):

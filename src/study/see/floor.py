@@ -50,9 +50,6 @@ from study.see.trajectory import Trajectory
 
 MIN_MARKS = 4
 """Marks a homography needs; five or more are recommended (four fit any camera exactly: nothing checks them)."""
-MARKS = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])
-"""Where the study tapes its marks, metres on the floor about the throw's middle: a 2 m x 1.5 m rectangle's corners
-and the middles of its long sides (the camera sweep's floor path, ``study render``'s FLOOR.csv, the scripts)."""
 
 
 @dataclass(frozen=True)
