@@ -357,3 +357,20 @@ def test_a_readers_folder_keeps_every_clip_and_the_shared_clips_a_presets_few(tm
     clips = [realworld.Video(tmp_path / f"{i}.mp4", "light") for i in range(4)]
     assert realworld.shown(clips, str(tmp_path), 2) == clips, "a folder the reader gave: every clip"
     assert realworld.shown(clips, "", 2) == clips[:2], "the shared clips: the preset's few"
+
+
+def test_the_floor_models_labels_through_floor_marks_read_back_and_show_as_counts(tmp_path):
+    """The model recommended for the floor path, on the book's renders through floor marks beside the renderer's
+    camera: stored under realworld.floor.<model>.<class>, read back, and a table column of counts per class."""
+    n = realworld.reported(_rec(), {"table1": ("Table 1's Z model", RENDERED, REAL),
+                                    "floor": ("recommended for floor marks (heights, floor)", RENDERED, REAL)},
+                           floor={"floor": RENDERED[:3]})
+    assert "realworld.floor.floor.light" in {name for name, _ in n.entries()}
+    f = tmp_path / "results.json"
+    f.write_text(results.dumps(n.entries()))
+    assert realworld.Numbers.read(results.load(f)) == n
+    table = realworld._user_table({"floor model": (RENDERED, RENDERED, RENDERED, RENDERED[:3])})
+    light, heavy = table.rows
+    right = sum(r.correct for r in RENDERED[:3] if r.label == "light")
+    assert light["floor"].startswith(f"{right} / {sum(r.label == 'light' for r in RENDERED[:3])}, ")
+    assert "floor marks" in table.columns["floor"] and heavy["class"] == "heavy"

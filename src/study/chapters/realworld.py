@@ -381,17 +381,21 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
         "table1": (model_name or ("your model" if model is not None else "Table 1's Z model"), tm)}
     if rec.choice != "positions, exact" or model is not None:  # otherwise the recommended model is Table 1's
         models["recommended"] = (f"recommended ({rec.choice})", rec.model)
+    if rec.floor_choice is not None:
+        models["floor"] = (f"recommended for floor marks ({rec.floor_choice})", rec.models[rec.floor_choice])
     labels = {key: (classify(m, rendered, tracks_r, progress=False), classify(m, real, tracks_q, progress=False))
               for key, (_, m) in models.items()}
     shape = camera_cost.shape_of(runner.synth_config)
     side = render.scene_camera(render.class_model("light"), rcfg.camera, rcfg.width, rcfg.height)  # the scene's own
     on_renders = [camera_cost.video_heights(v, shape, lambda _: side) for v in rendered]  # tracked once, read every way
     tracks_u = user_tracks(rendered, on_renders)
+    tracks_f = user_tracks(rendered, on_renders, camera_cost.FLOOR_PATH)
     render_heights = camera_cost.height_errors(on_renders)
     user = {key: classify(m, rendered, tracks_u, progress=False) for key, (_, m) in models.items()}
+    floor = {key: classify(m, rendered, tracks_f, progress=False) for key, (_, m) in models.items()}
     tracks_x = truth_tracks(rendered)
     exact = {key: classify(m, rendered, tracks_x, progress=False) for key, (_, m) in models.items()}
-    numbers = reported(rec, {key: (models[key][0], *labels[key]) for key in models}, user, exact, objects)
+    numbers = reported(rec, {key: (models[key][0], *labels[key]) for key in models}, user, exact, objects, floor)
     classified = numbers.models
 
     light = next(v for v in rendered if v.label == "light")
@@ -414,18 +418,19 @@ def compute(runner: Runner, real: Sequence[Video] = (), model: Model | None = No
         scale_sweep(tm, rendered, real, tracks_r, tracks_q),
         n_rendered=n, n_real=len(real), model_frames=tm.n_frames, model_seconds=f"{tm.n_frames / tm.fps:g}",
         render_size=f"{rcfg.width}×{rcfg.height}", scale_err=pct(scale_error(tracks_r.values(), true_scale(rcfg))),
-        user_table=_user_table({models[k][0]: (exact[k], labels[k][0], user[k]) for k in models}),
+        user_table=_user_table({models[k][0]: (exact[k], labels[k][0], user[k], floor[k]) for k in models}),
         heights_table=_render_heights_table(render_heights), real_objects=objects,
         real_found=real_found if real_found is not None else len(real))
 
 
 def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Label], Sequence[Label]]],
              user: dict[ModelKey, Sequence[Label]] | None = None,
-             exact: dict[ModelKey, Sequence[Label]] | None = None, objects: str = REAL_OBJECTS) -> Numbers:
+             exact: dict[ModelKey, Sequence[Label]] | None = None, objects: str = REAL_OBJECTS,
+             floor: dict[ModelKey, Sequence[Label]] | None = None) -> Numbers:
     """What the chapter reports: each candidate's validation accuracy (``rec``), the paper's figures judged,
     each model's accuracy per class from its ``labels`` (model key -> (its name, its labels of the rendered
-    videos, of the real clips)), its labels of the rendered videos on a user's path (``user``) and from their exact
-    heights (``exact``)."""
+    videos, of the real clips)), its labels of the rendered videos on a user's path (``user``), from their exact
+    heights (``exact``) and through floor marks (``floor``)."""
     judged = _figures(objects)
     why = verdicts.not_comparable(WHY_NOT_COMPARABLE["rendered"])
 
@@ -437,7 +442,8 @@ def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Lab
 
     return Numbers(_candidates(rec), judged["figure1"], judged["figure5"], judged["figure6"],
                    {key: _classified(name, rendered, real, objects) for key, (name, rendered, real) in labels.items()},
-                   per_class(user, "on a user's path"), per_class(exact, "from their exact heights"))
+                   per_class(user, "on a user's path"), per_class(exact, "from their exact heights"),
+                   per_class(floor, "through floor marks"))
 
 
 def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:
@@ -484,20 +490,21 @@ def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered
                         "verdict": "paper vs ours", "real": "ours, real [95 % Wilson]"})
 
 
-def _user_table(models: dict[str, tuple[Sequence[Label], Sequence[Label], Sequence[Label]]]) -> Table:
+def _user_table(models: dict[str, tuple[Sequence[Label], ...]]) -> Table:
     """Each model (by name: its labels of the rendered videos from their exact heights, by the renderer's camera,
-    and by a user's path) per class, with the videos right as counts."""
+    by a user's path and through floor marks) per class, with the videos right as counts."""
     rows = []
     for name, labels in models.items():
         ivs = [per_class_interval(got) for got in labels]
         for c in CLASSES:
             row = {"model": name, "class": c}
-            for key, got, iv in zip(("exact", "known", "user"), labels, ivs):
+            for key, got, iv in zip(("exact", "known", "user", "floor"), labels, ivs):
                 right, n = sum(r.correct for r in got if r.label == c), sum(r.label == c for r in got)
                 row[key] = f"{right} / {n}, {_pct_ci(iv[c])}"
             rows.append(row)
     return Table(rows, {"model": "model", "class": "class", "exact": "exact heights (the renderer's truth)",
-                        "known": "the renderer's camera", "user": "a user's path, no camera"})
+                        "known": "the renderer's camera", "user": "a user's path, no camera",
+                        "floor": "floor marks, clicked (--floor)"})
 
 
 def _real_table(labels: Sequence[Label]) -> Table:

@@ -69,11 +69,11 @@ def track_all(videos: Sequence[Video], progress: bool = True) -> dict[str, Track
     return out
 
 
-def user_tracks(videos: Sequence[Video], heights: Sequence[camera_cost.Heights]) -> dict[str, Tracked]:
+def user_tracks(videos: Sequence[Video], heights: Sequence[camera_cost.Heights],
+                path: str = camera_cost.DEFAULT_PATH) -> dict[str, Tracked]:
     """Every rendered video as ``study classify VIDEO --color C --object-size D`` tracks it (no camera, no ground
-    truth): the default path's track of its :func:`study.methods.camera_cost.video_heights`, ``heights``, which
-    tracked it once for every path."""
-    path = camera_cost.DEFAULT_PATH
+    truth): ``path``'s track (by default the default path's; ``camera_cost.FLOOR_PATH``: ``--floor``'s) of its
+    :func:`study.methods.camera_cost.video_heights`, ``heights``, which tracked it once for every path."""
     return {v.path.name: Tracked(h.tracks[path]) if path in h.tracks else Tracked(None, str(h.paths[path]))
             for v, h in zip(videos, heights)}
 

@@ -19,8 +19,9 @@ gives them, on random observations for the floor path's error, or on that error 
 (``study.methods.recommend.candidates``)."""
 
 
-ModelKey = Literal["table1", "recommended"]
-"""The models the chapter classifies the videos with: Table 1's Z model, and the recommended one where it differs."""
+ModelKey = Literal["table1", "recommended", "floor"]
+"""The models the chapter classifies the videos with: Table 1's Z model, the recommended one where it differs, and
+the one recommended for the floor path where the build trained one."""
 
 
 @dataclass(frozen=True)
@@ -67,3 +68,6 @@ class Numbers(Reported):
     exact: dict[ModelKey, dict[Class, Number]] = named("exact", default_factory=dict)
     """Each model's labels of the rendered videos from their exact heights (the renderer's truth: no tracker, no
     camera): ``realworld.exact.table1.light`` and so on."""
+    floor: dict[ModelKey, dict[Class, Number]] = named("floor", default_factory=dict)
+    """Each model's labels of the rendered videos through floor marks clicked a pixel off (``study classify
+    --floor``): ``realworld.floor.floor.light`` and so on."""
