@@ -372,5 +372,5 @@ def test_the_floor_models_labels_through_floor_marks_read_back_and_show_as_count
     table = realworld._user_table({"floor model": (RENDERED, RENDERED, RENDERED, RENDERED[:3])})
     light, heavy = table.rows
     right = sum(r.correct for r in RENDERED[:3] if r.label == "light")
-    assert light["floor"].startswith(f"{right} / {sum(r.label == 'light' for r in RENDERED[:3])}, ")
+    assert light["floor"].startswith(f"{right}/{sum(r.label == 'light' for r in RENDERED[:3])} (")
     assert "floor marks" in table.columns["floor"] and heavy["class"] == "heavy"

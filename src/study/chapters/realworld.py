@@ -492,7 +492,7 @@ def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered
 
 def _user_table(models: dict[str, tuple[Sequence[Label], ...]]) -> Table:
     """Each model (by name: its labels of the rendered videos from their exact heights, by the renderer's camera,
-    by a user's path and through floor marks) per class, with the videos right as counts."""
+    by a user's path and through floor marks) per class: the videos right as counts, with their 95 % interval."""
     rows = []
     for name, labels in models.items():
         ivs = [per_class_interval(got) for got in labels]
@@ -500,11 +500,11 @@ def _user_table(models: dict[str, tuple[Sequence[Label], ...]]) -> Table:
             row = {"model": name, "class": c}
             for key, got, iv in zip(("exact", "known", "user", "floor"), labels, ivs):
                 right, n = sum(r.correct for r in got if r.label == c), sum(r.label == c for r in got)
-                row[key] = f"{right} / {n}, {_pct_ci(iv[c])}"
+                row[key] = f"{right}/{n}" + ("" if iv[c] is None else f" ({100 * iv[c].lo:.0f}-{100 * iv[c].hi:.0f} %)")
             rows.append(row)
     return Table(rows, {"model": "model", "class": "class", "exact": "exact heights (the renderer's truth)",
                         "known": "the renderer's camera", "user": "a user's path, no camera",
-                        "floor": "floor marks, clicked (--floor)"})
+                        "floor": "floor marks, clicked (--floor)"})  # cells: right/videos (95 % interval)
 
 
 def _real_table(labels: Sequence[Label]) -> Table:
