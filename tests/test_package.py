@@ -149,7 +149,7 @@ def test_every_readme_recipe_runs_as_written(tmp_path):
         assert proc.returncode == 0, f"{line}: {proc.stderr[-1500:]}"
         if argv[:2] == ["study", "classify"]:
             assert "trust: " in proc.stdout, f"{line}: {proc.stdout}"
-            assert ("floor marks path" in proc.stdout) == ("--floor" in argv), proc.stdout
+            assert ("floor marks" in proc.stdout) == ("--floor" in argv), proc.stdout
     for made in ("throw.csv", "throw-tracked.mp4", "answers.csv", "data-seed3.ipynb", "samples/FLOOR.csv",
                  "samples/MARKS.csv"):
         assert (tmp_path / made).is_file(), made
