@@ -124,3 +124,17 @@ def test_study_track_and_classify_find_the_marks_in_a_rendered_clip(tmp_path, ca
                    "--object-shape", "box", "--floor", str(tmp_path / "MARKS.csv")])
     err = capsys.readouterr().err
     assert rc == 2 and "MARKS.csv: positions only, and t.csv is a track, not a video" in err, err
+
+
+def test_study_track_reads_the_floor_before_it_tracks(tmp_path, monkeypatch, capsys):
+    from study.see import track
+
+    def never(*args, **kwargs):
+        raise AssertionError("tracked before the floor was read")
+
+    monkeypatch.setattr(track, "track_video", never)
+    (tmp_path / "MARKS.csv").write_text("x,y\n0,0\n1,0\n0,1\n1,1\n")
+    (tmp_path / "v.mp4").write_bytes(b"not read")
+    rc = cli.main(["track", str(tmp_path / "v.mp4"), "--color", "orange", "--object-size", "0.2", "--floor",
+                   str(tmp_path / "MARKS.csv")])
+    assert rc == 2 and "MARKS.csv: 4 positions" in capsys.readouterr().err

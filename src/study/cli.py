@@ -313,10 +313,11 @@ def _object_shape(a: argparse.Namespace):
     return shape(tuple(a.object_size), a.object_shape) if a.object_size else None
 
 
-def _on_floor(pixels, a: argparse.Namespace):
-    """``study track --floor``: the pixel track with heights through the camera the floor marks give; prints what
-    the floor says of the camera."""
+def _on_floor(a: argparse.Namespace):
+    """``study track --floor``: the video tracked, with heights through the camera the floor marks give; prints what
+    the floor says of the camera. The floor is read (and its marks found) before the tracking."""
     from study.core.errors import ConfigError
+    from study.see import track
     from study.see.floor import on_floor
     from study.see.marks import FOUND, located, needs_finding, read
 
@@ -325,7 +326,8 @@ def _on_floor(pixels, a: argparse.Namespace):
     if shape is None:
         raise ConfigError("--floor: give the object's size (--object-size, and --object-shape) for the height of its "
                           "centre when it lies on the floor")
-    traj, cal = on_floor(pixels, located(marks, a.video), shape.rest_height())
+    found = located(marks, a.video)
+    traj, cal = on_floor(track.track_video(a.video, _track_config(a)), found, shape.rest_height())
     print(f"{a.video}: {cal.note()}{FOUND if needs_finding(marks) else ''}")
     return traj
 
@@ -366,7 +368,7 @@ def _add_track(sub: argparse._SubParsersAction) -> None:
                 if path is not None:
                     check_writable(path, what)  # before the tracking, not after it
             if a.floor is not None:
-                traj = _on_floor(track.track_video(a.video, _track_config(a)), a)
+                traj = _on_floor(a)
             else:
                 traj = track.track_video(a.video, _track_config(a), ground_v=a.ground_v, shape=_object_shape(a),
                                          scale_from=a.scale_from, metres_per_pixel=a.metres_per_pixel)
