@@ -1,5 +1,5 @@
-"""Floor marks found by their colour: a user who tapes coloured discs on the floor gives only their positions
-(``FLOOR.csv`` with the header ``x,y``), and the video gives their pixels.
+"""Floor marks found by their colour: a user who lays magenta discs on the floor gives only their positions (a CSV
+with the header ``x,y``: ``study render``'s ``MARKS.csv``), and the video gives their pixels.
 
 :func:`find` thresholds one picture in HSV (:data:`MARK_HSV`, a magenta no object of the study has and the checker
 floor's grey and white edge lines are not) and returns each compact blob's centre; :func:`find_in_video` reads it
