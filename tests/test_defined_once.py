@@ -16,7 +16,7 @@ from study.report import learners as named
 from study.report import usercamera
 from study.runs import paper
 from study.runs.presets import preset
-from study.see import marks, paths, scale
+from study.see import paths, scale
 from study.simulate import observe
 
 
@@ -57,6 +57,8 @@ def test_a_users_paths_are_named_alike_on_the_command_line_in_the_sweep_and_in_t
     assert cli.SCALE_FROM_DEFAULT == scale.DEFAULT in scale.SCALE_FROM
     assert camera_cost.PATHS == tuple(p.words for p in paths.PATHS)
     assert typing.get_args(paths.PathKey) == (paths.EXACT, paths.KNOWN, *(p.key for p in paths.PATHS))
-    assert typing.get_args(usercamera.SweepKey) == (*typing.get_args(paths.PathKey), marks.PATH_KEY)
-    assert camera_cost.MEASURED == (paths.KNOWN_WORDS, *camera_cost.PATHS, marks.PATH_WORDS)
+    from study.chapters import usercamera as page
+
+    assert set(page.PATH_KEYS) == {paths.EXACT, *camera_cost.MEASURED}, "every way the sweep measures has a key"
+    assert set(page.PATH_KEYS.values()) == set(typing.get_args(usercamera.SweepKey)), "every key is read back"
     assert set(camera_cost.SCALE) | {camera_cost.FLOOR_PATH} == set(camera_cost.PATHS), "every path has a way to its heights"

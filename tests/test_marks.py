@@ -70,6 +70,8 @@ def test_a_positions_only_floor_file_is_read_and_a_bad_one_refused_naming_the_li
     f.write_text("x,y\n0,0\n1,zero\n")
     with pytest.raises(ConfigError, match="MARKS.csv, line 3: '1,zero' is not two numbers"):
         marks.read(f)
+    f.write_bytes(b"\xef\xbb\xbf" + b"x,y\n" + "".join(f"{x},{y}\n" for x, y in marklayout.LAYOUT).encode())
+    assert marks.needs_finding(marks.read(f)), "a spreadsheet's byte-order mark before the header"
     f.write_text("u,v,x,y\n" + "".join(f"{10 * i},{5 * i * i},{x},{y}\n" for i, (x, y) in enumerate(marklayout.LAYOUT)))
     assert not marks.needs_finding(marks.read(f))  # pixels given: read as FLOOR.csv
 

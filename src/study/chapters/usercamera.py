@@ -263,12 +263,12 @@ class UserCamera:
         fl, default = res[camera_cost.FLOOR_PATH], res[camera_cost.DEFAULT_PATH]
         mm = "no heights" if math.isnan(fl.rms_centred_mm) else f"{fl.rms_centred_mm:.0f} mm off"
         found = res.get(camera_cost.FOUND)
-        found_mm = ("" if found is None else "; found by their colour rather than clicked, "
-                    + ("none gave heights" if math.isnan(found.rms_centred_mm) else
-                       f"{found.rms_centred_mm:.0f} mm" + (f", {found.no_heights} clips without heights"
+        found_mm = ("" if found is None else "; with the marks found by their colour, not clicked, "
+                    + ("no heights" if math.isnan(found.rms_centred_mm) else
+                       f"{found.rms_centred_mm:.0f} mm" + (f" ({found.no_heights} clips without)"
                                                            if found.no_heights else "")))
         words = (f"with {len(marklayout.LAYOUT)} marks taped around the throw, the heights are {mm} (one "
-                 f"scale: {default.rms_centred_mm:.0f} mm{found_mm}) and the recommended model labels "
+                 f"scale: {default.rms_centred_mm:.0f} mm){found_mm}; the recommended model labels "
                  f"{pct_ci(fl.accuracy)} "
                  f"right ({pct_ci(default.accuracy)} with one scale)")
         name = self.camera.floor_choice

@@ -120,8 +120,7 @@ def clicked_floor(camera: Camera, path: np.ndarray, name: str) -> floor.Floor:
 def found_floor(v: Video, path: np.ndarray) -> floor.Floor:
     """The floor marks drawn about a throw whose centre follows ``path`` (n, 3) metres (``sweep.marks_about``),
     their pixels found in the video ``v`` by their colour and paired with their positions (``study.see.marks``)."""
-    return marks.located(floor.Floor(np.full((len(marklayout.LAYOUT), 2), np.nan), sweep.marks_about(path),
-                                     v.path.name), v.path)
+    return marks.located(floor.Floor(np.full((len(marklayout.LAYOUT), 2), np.nan), sweep.marks_about(path)), v.path)
 
 
 def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], Camera] | None = None,

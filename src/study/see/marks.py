@@ -144,12 +144,13 @@ def read(path: str | Path) -> Floor:
 
     p = Path(path)
     try:
-        first = p.open(newline="").readline() if p.is_file() else ""
+        with p.open(newline="", encoding="utf-8-sig") as f:  # a spreadsheet's CSV may start with a byte-order mark
+            first = f.readline()
     except (OSError, UnicodeDecodeError):
         first = ""
     if [c.strip().lower() for c in first.split(",")] != ["x", "y"]:
         return read_floor(p)  # u,v,x,y, or its error for a missing, empty or unreadable file or a bad header
-    rows = [r for r in p.read_text().splitlines()[1:] if r.strip()]
+    rows = [r for r in p.read_text(encoding="utf-8-sig").splitlines()[1:] if r.strip()]
     values = []
     for i, r in enumerate(rows, start=2):
         try:
@@ -163,6 +164,9 @@ def read(path: str | Path) -> Floor:
     if len(points) <= MIN_MARKS:
         raise ConfigError(f"floor file {p}: {len(points)} positions; marks found by their colour need five or more "
                           "(four fit any pairing with the pixels), or give their pixels (header u,v,x,y)")
+    if len(points) > MAX_MARKS:
+        raise ConfigError(f"floor file {p}: {len(points)} positions; marks found by their colour are paired "
+                          f"{MAX_MARKS} at most; give their pixels (header u,v,x,y)")
     return Floor(np.full_like(points, np.nan), points, str(p))
 
 
