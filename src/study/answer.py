@@ -24,7 +24,7 @@ from study.runs import measured, recommended
 from study.see import track
 from study.see.config import TrackConfig
 from study.see.floor import Floor, on_floor
-from study.see.marks import FOUND, PATH_KEY as FOUND_PATH, located, needs_finding, read as read_floor
+from study.see.marks import PATH_KEY as FOUND_PATH, located, needs_finding, read as read_floor
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 from study.trust import CANNOT_TELL, FLOOR, Measurements, Trust, exact_warning, for_answer, measurements, path_of
@@ -213,8 +213,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
         raise ModelError(f"{which} was trained on {m.dims!r}; one camera gives only the height: use a model trained "
                          "on 'z' (the paper's real-world test does)")
     path = Path(source)
-    found = floor is not None and needs_finding(floor)
-    if found and path.suffix.lower() == ".csv":
+    if floor is not None and needs_finding(floor) and path.suffix.lower() == ".csv":
         raise ConfigError(f"{floor.source}: positions only, and {path.name} is a track, not a video: the marks are "
                           "found in the video; classify the video, or give the marks' pixels (header u,v,x,y)")
     floor = located(floor, path) if floor is not None else None  # a bad floor before the tracking
@@ -223,8 +222,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
     rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0
     if floor is not None:  # the camera the floor marks give: each frame's own depth
         traj, cal = on_floor(pixels, floor, rest)
-        how = (f"{cal.note()}{FOUND if found else ''}; each frame's centre from the contacts and the flights between "
-               "them, the centre "
+        how = (f"{cal.note()}; each frame's centre from the contacts and the flights between them, the centre "
                f"{rest:.3f} m up at rest")
     else:
         traj, scale = in_metres(pixels, object_shape, scale_from, metres_per_pixel)
@@ -232,6 +230,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
                f"(the camera's tilt and the object's changing distance ignored), the centre {rest:.3f} m up at rest")
     x = track.to_model_input(traj, m.fps, m.n_frames, rest_height=rest)
     p_heavy = float(m.predict_proba(x[None])[0, 1])
+    found = floor is not None and floor.found
     route = path_of(floor is not None, scale_from, metres_per_pixel, found)  # how the heights were had
     trust = for_answer(got.kind, route, got.seen, got.band_for(route))
     piece = traj.longest()

@@ -130,7 +130,6 @@ def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], C
     by colour only where they were ``drawn`` (``study.methods.marked``)."""
     truth = render.read_truth(v.truth)
     world = np.column_stack([truth["x"], truth["y"], truth["z"]])
-    clicked = None if camera is None else clicked_floor(camera(world), world, v.path.name)
     rest = v.rest_height
     exact = truth["z"] - rest
     paths: dict[str, np.ndarray | str] = {}
@@ -139,37 +138,33 @@ def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], C
         px = track.track_video(v.path, v.track_config())
     except StudyError as e:
         return Heights(exact, dict.fromkeys(MEASURED, str(e)), {})
-    if camera is None:
-        paths[KNOWN] = "no camera: the video's camera is not known"
-    else:  # the camera at the video's own size (an odd frame size is written one pixel narrower)
-        own = camera(world)
-        cam = replace(own, width=px.width or own.width, height=px.height_px or own.height)
-        depth = cam.depth_of(world)
-        depth = np.concatenate([depth, np.full(max(0, len(px.t) - len(depth)), depth[-1])])[: len(px.t)]
-        known = set_camera(px, cam, depth, rest)
-        tracks[KNOWN] = known
-        paths[KNOWN] = _padded(np.where(known.status > 0, known.height, np.nan), len(exact))
-    for name in PATHS:
+
+    def read(name: str) -> Trajectory:
+        """The tracked pixels in metres by ``name`` (one of :data:`MEASURED`)."""
+        if name in SCALE:
+            return SCALE[name](px, shape)
+        if camera is None:
+            raise ConfigError("no camera: the video's camera is not known")
+        if name == KNOWN:  # the camera at the video's own size (an odd frame size is written one pixel narrower)
+            own = camera(world)
+            cam = replace(own, width=px.width or own.width, height=px.height_px or own.height)
+            depth = cam.depth_of(world)
+            depth = np.concatenate([depth, np.full(max(0, len(px.t) - len(depth)), depth[-1])])[: len(px.t)]
+            return set_camera(px, cam, depth, rest)
+        if name == FLOOR_PATH:
+            return floor.on_floor(px, clicked_floor(camera(world), world, v.path.name), rest)[0]
+        if not drawn:
+            raise ConfigError("no floor marks drawn in the video")
+        return floor.on_floor(px, found_floor(v, world), rest)[0]
+
+    for name in MEASURED:
         try:
-            if name != FLOOR_PATH:
-                t = SCALE[name](px, shape)
-            elif clicked is None:
-                raise ConfigError("no floor marks: the video's camera is not known")
-            else:
-                t, _ = floor.on_floor(px, clicked, rest)
+            t = read(name)
         except StudyError as e:
             paths[name] = str(e)
             continue
         tracks[name] = t
         paths[name] = _padded(np.where(t.status > 0, t.height, np.nan), len(exact))
-    try:
-        if not drawn:
-            raise ConfigError("no floor marks drawn in the video")
-        t, _ = floor.on_floor(px, found_floor(v, world), rest)
-        tracks[FOUND] = t
-        paths[FOUND] = _padded(np.where(t.status > 0, t.height, np.nan), len(exact))
-    except StudyError as e:
-        paths[FOUND] = str(e)
     return Heights(exact, paths, tracks)
 
 
@@ -253,7 +248,7 @@ def floors(clips: Sequence[Clip], tracked: Sequence[Heights]) -> dict[str, Floor
 
 def path_errors(h: Heights, path: str) -> np.ndarray:
     """(frames,) one video's height error by ``path`` on every frame it has a height for, metres."""
-    got = h.paths.get(path, "not measured")
+    got = h.paths[path]
     return np.array([]) if isinstance(got, str) else (got - h.exact)[np.isfinite(got)]
 
 
@@ -268,9 +263,9 @@ def rms_mm(errors: Sequence[np.ndarray]) -> tuple[float, float]:
 
 
 def height_errors(tracked: Sequence[Heights]) -> dict[str, tuple[float, float]]:
-    """Each path's height error over ``tracked`` videos (and the known camera's, where measured): path ->
+    """Each way's height error over ``tracked`` videos (:data:`MEASURED`; NaN where none had heights): way ->
     :func:`rms_mm` (raw, median removed), mm."""
-    return {k: rms_mm([path_errors(h, k) for h in tracked]) for k in MEASURED if any(k in h.paths for h in tracked)}
+    return {k: rms_mm([path_errors(h, k) for h in tracked]) for k in MEASURED}
 
 
 @dataclass(frozen=True)
@@ -309,7 +304,7 @@ def inputs(clips: Sequence[Clip], tracked: Sequence[Heights], fps: float, n_fram
     for i, (clip, h) in enumerate(zip(clips, tracked, strict=True)):
         x["exact"][i] = exact_input(clip, fps, n_frames)
         for k in MEASURED:
-            if isinstance(h.paths.get(k, "not measured"), str):
+            if isinstance(h.paths[k], str):
                 missing[k][i] = True
                 continue
             try:

@@ -62,6 +62,8 @@ class Floor:
     """(k, 2) float64: x, y on the floor, metres."""
     source: str = ""
     """Where they were read from (for errors)."""
+    found: bool = False
+    """True when the pixels were found in the video by their colour (``study.see.marks``), not given."""
 
 
 def seen(camera: Camera, points: np.ndarray, click_px: float = 0.0, seed: int = 0, source: str = "") -> Floor:
@@ -73,36 +75,46 @@ def seen(camera: Camera, points: np.ndarray, click_px: float = 0.0, seed: int = 
     return Floor(px[inside], np.asarray(points, np.float64)[inside], source)
 
 
+HEADERS = {"u,v,x,y": "a mark's pixel, then its x and y on the floor, metres",
+           "x,y": "a mark's x and y on the floor, metres: its pixel found in the video (magenta marks)"}
+"""The headers a floor file may have, and what each row holds."""
+
+
 def read_floor(path: str | Path) -> Floor:
-    """The marks of ``path``, a CSV with the header ``u,v,x,y`` and one row per mark. :class:`DataError` for a
-    missing, empty or unreadable file, :class:`ConfigError` for a bad header, a value that is not a number, fewer than
-    :data:`MIN_MARKS` marks or marks on one line; each names the file and what to write."""
+    """The marks of ``path``, a CSV with one row per mark and the header ``u,v,x,y`` (each mark's pixel and
+    position) or ``x,y`` (positions only: the pixels NaN, to be found in the video, ``study.see.marks.located``); a
+    spreadsheet's byte-order mark is allowed. :class:`DataError` for a missing, empty or unreadable file,
+    :class:`ConfigError` for a bad header, a value that is not a number, fewer than :data:`MIN_MARKS` marks or marks
+    on one line; each names the file and what to write."""
     p = Path(path)
     if not p.is_file():
         raise DataError(f"floor file {p}: no such file; write a CSV with the header u,v,x,y and one row per floor mark "
                         "(its pixel, then its position on the floor in metres)")
     try:
-        rows = list(csv.reader(p.open(newline="")))
+        rows = list(csv.reader(p.open(newline="", encoding="utf-8-sig")))
     except (OSError, UnicodeDecodeError, csv.Error) as e:
         raise DataError(f"floor file {p}: cannot be read ({type(e).__name__}); write it as a plain CSV") from None
     rows = [r for r in rows if any(c.strip() for c in r)]
     if not rows:
         raise DataError(f"floor file {p}: empty; write the header u,v,x,y and one row per floor mark")
-    header = [c.strip().lower() for c in rows[0]]
-    if header != ["u", "v", "x", "y"]:
+    header = ",".join(c.strip().lower() for c in rows[0])
+    if header not in HEADERS:
         raise ConfigError(f"floor file {p}: header {','.join(rows[0])!r}; it must be u,v,x,y (pixel right, pixel down, "
-                          "then the mark's x and y on the floor, metres)")
+                          "then the mark's x and y on the floor, metres), or x,y for magenta marks found in the video")
+    width = header.count(",") + 1
     values = []
     for i, r in enumerate(rows[1:], start=2):
         try:
             row = [float(c) for c in r]
         except ValueError:
-            raise ConfigError(f"floor file {p}, line {i}: {','.join(r)!r} is not four numbers u,v,x,y") from None
-        if len(row) != 4 or not all(math.isfinite(x) for x in row):
-            raise ConfigError(f"floor file {p}, line {i}: {','.join(r)!r} is not four finite numbers u,v,x,y")
+            row = []
+        if len(row) != width or not all(math.isfinite(x) for x in row):
+            raise ConfigError(f"floor file {p}, line {i}: {','.join(r)!r} is not {('two', 'four')[width // 4]} "
+                              f"numbers {header} ({HEADERS[header]})")
         values.append(row)
-    a = np.array(values, np.float64).reshape(-1, 4)
-    floor = Floor(a[:, :2], a[:, 2:], str(p))
+    a = np.array(values, np.float64).reshape(-1, width)
+    pixels = a[:, :2] if width == 4 else np.full((len(a), 2), np.nan)
+    floor = Floor(pixels, a[:, -2:], str(p))
     check_spread(floor)
     return floor
 
@@ -115,6 +127,8 @@ def check_spread(floor: Floor) -> None:
         raise ConfigError(f"{where}: {len(floor.points)} marks; give at least {MIN_MARKS} (five or more are "
                           "recommended: four fit any camera exactly)")
     for what, xy in (("on the floor", floor.points), ("in the image", floor.pixels)):
+        if not np.isfinite(xy).all():
+            continue  # positions only: the pixels are found later
         centred = xy - xy.mean(axis=0)
         s = np.linalg.svd(centred, compute_uv=False)
         if s[1] <= 1e-3 * max(s[0], 1e-12):
@@ -132,6 +146,8 @@ class Calibration:
     assumed_fov: bool
     """True when the marks could not fix the focal length and a field of view of ``DEFAULT_FOVY`` was assumed."""
     n_marks: int
+    found: bool = False
+    """True when the marks' pixels were found in the video by their colour, not given."""
 
     def note(self) -> str:
         """What the answer assumed of the camera, in words."""
@@ -140,6 +156,8 @@ class Calibration:
                + ("; four marks fit any camera exactly, so nothing checks them: five or more are recommended"
                   if self.n_marks == MIN_MARKS else "") + f"), {self.camera.position[2]:.2f} m up, "
                f"{fov:.0f}° field of view")
+        if self.found:
+            out += " (the marks found in the video by their magenta)"
         if self.assumed_fov:
             out += f" (assumed: the marks cannot fix the focal length; {DEFAULT_FOVY:g}° taken)"
         return out
@@ -161,7 +179,7 @@ def calibrate(floor: Floor, width: int, height: int) -> Calibration:
     ground = np.column_stack([floor.points, np.zeros(len(floor.points))])
     err = cam.project(ground) - floor.pixels
     return Calibration(cam, float(np.sqrt(np.mean(np.sum(err**2, axis=1)))), bool(abs(cam.focal - default_f) < 1e-9),
-                       len(floor.points))
+                       len(floor.points), floor.found)
 
 
 def _median5(a: np.ndarray) -> np.ndarray:

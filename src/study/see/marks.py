@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from study.core.errors import ConfigError, DataError
-from study.see.floor import MIN_MARKS, Floor, check_spread
+from study.see.floor import MIN_MARKS, Floor, check_spread, read_floor
 from study.see.ground import camera_from_floor
 from study.see.marklayout import MARK_HSV
 from study.see.video import open_video
@@ -34,8 +34,6 @@ AMBIGUOUS = 3.0
 ambiguous."""
 FRAMES = 9
 """Frames whose per-pixel median :func:`find_in_video` reads."""
-FOUND = " (the marks found in the video by their magenta)"
-"""What an answer adds to the camera's note when :func:`located` found the marks."""
 PATH_KEY = "found"
 """The results' key of the floor path with its marks found by colour (``study classify --floor MARKS.csv``), beside
 ``study.see.paths``' keys (the floor path's own, ``floor``, is the marks clicked)."""
@@ -132,42 +130,22 @@ def match(pixels: np.ndarray, points: np.ndarray, width: int, height: int, sourc
     if best is None:
         raise ConfigError(f"{where}: no pairing of the marks found with the positions gives a camera above the "
                           "floor; check the positions")
-    return Floor(pixels, points[list(best[1])], source)
+    return Floor(pixels, points[list(best[1])], source, found=True)
 
 
 def read(path: str | Path) -> Floor:
-    """The floor marks of ``path``: with the header ``u,v,x,y`` each mark's pixel and position
-    (``study.see.floor.read_floor``); with the header ``x,y`` their positions only, to be found in the video by
-    their colour (:func:`located`; the pixels NaN until then). :class:`DataError` / :class:`ConfigError` naming the
-    file and what to write."""
-    from study.see.floor import read_floor
-
-    p = Path(path)
-    try:
-        with p.open(newline="", encoding="utf-8-sig") as f:  # a spreadsheet's CSV may start with a byte-order mark
-            first = f.readline()
-    except (OSError, UnicodeDecodeError):
-        first = ""
-    if [c.strip().lower() for c in first.split(",")] != ["x", "y"]:
-        return read_floor(p)  # u,v,x,y, or its error for a missing, empty or unreadable file or a bad header
-    rows = [r for r in p.read_text(encoding="utf-8-sig").splitlines()[1:] if r.strip()]
-    values = []
-    for i, r in enumerate(rows, start=2):
-        try:
-            xy = [float(c) for c in r.split(",")]
-        except ValueError:
-            xy = []
-        if len(xy) != 2 or not all(math.isfinite(c) for c in xy):
-            raise ConfigError(f"floor file {p}, line {i}: {r!r} is not two numbers x,y (metres on the floor)")
-        values.append(xy)
-    points = np.array(values, np.float64).reshape(-1, 2)
-    if len(points) <= MIN_MARKS:
-        raise ConfigError(f"floor file {p}: {len(points)} positions; marks found by their colour need five or more "
+    """The floor marks of ``path`` (``study.see.floor.read_floor``: the header ``u,v,x,y``, or ``x,y`` for positions
+    only, their pixels to be found in the video by :func:`located`), with as many positions as finding them by colour
+    can pair (five to :data:`MAX_MARKS`); :class:`ConfigError` naming the file and what to write."""
+    floor = read_floor(path)
+    n = len(floor.points)
+    if needs_finding(floor) and n <= MIN_MARKS:
+        raise ConfigError(f"floor file {path}: {n} positions; marks found by their colour need five or more "
                           "(four fit any pairing with the pixels), or give their pixels (header u,v,x,y)")
-    if len(points) > MAX_MARKS:
-        raise ConfigError(f"floor file {p}: {len(points)} positions; marks found by their colour are paired "
+    if needs_finding(floor) and n > MAX_MARKS:
+        raise ConfigError(f"floor file {path}: {n} positions; marks found by their colour are paired "
                           f"{MAX_MARKS} at most; give their pixels (header u,v,x,y)")
-    return Floor(np.full_like(points, np.nan), points, str(p))
+    return floor
 
 
 def needs_finding(floor: Floor) -> bool:
