@@ -126,3 +126,21 @@ def test_frames_the_floor_cannot_place_split_the_track_so_a_piece_holds_only_hei
     placed = np.array([1, 1, 0, 0, 1, 1, 1, 0, 1, 1], bool)
     st, seg = floor._unknown_split(status, segment, placed)
     assert seg.tolist() == [0, 0, -1, -1, 1, 1, 2, -1, 3, 3] and st.tolist() == [1, 1, 0, 0, 1, 1, 1, 0, 1, 1]
+
+
+@pytest.mark.parametrize("late", [2, -2])
+def test_a_contact_time_the_image_misjudges_by_two_frames_is_fitted_again_from_the_flight(late):
+    """A hop between two contacts on the rest plane, its contacts' times given ``late`` frames off (the tracks on
+    either side of a blurred bounce meet a frame or two away from it): the fit moves them back, and the hop's
+    heights stay within half a centimetre RMS (held at the wrong times: 6 and 19 mm)."""
+    fps, hop = 60.0, 0.5
+    t = np.arange(int(hop * fps) + 1) / fps
+    a, b = np.array([0.0, 0.0, REST]), np.array([0.8, 0.3, REST])
+    path = a + (b - a) * (t / hop)[:, None] + np.column_stack([0 * t, 0 * t, 0.5 * G * t * (hop - t)])
+    cam = scene(1.2, 20.0, 30.0, path)
+    uv = cam.project(path)
+    off = late / fps
+    contacts = [(0.0 + off, a), (hop - off, b)]
+    frames = np.arange(1, len(t) - 1)
+    xyz = floor._joint(cam, t, uv[:, 0], uv[:, 1], [(0, 1, frames)], contacts, REST)[0]
+    assert np.sqrt(np.mean((xyz[:, 2] - path[frames, 2]) ** 2)) < 0.005

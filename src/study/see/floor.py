@@ -12,11 +12,12 @@ With the camera known, a frame's ray fixes the centre up to its depth, and the t
 - **flights and contacts, fitted together** (:func:`_joint`): which frames fly comes from the image
   (``study.see.geometry.phases``: the track's curvature in metres at each frame's rest-plane depth, the rows first
   smoothed over :data:`SMOOTH_S`); each contact's time and pixel is where the image tracks on either side of it meet
-  (:func:`_contact`, a frame that still follows the flight's parabola moved into the flight). Between two contacts
-  the centre flies a ballistic arc (horizontal motion uniform, drag aside), the throw's first flight the arc that
-  ends at the first contact; every contact's 3-D point and the first flight's velocity are fitted at once to the
-  flights' pixels, each contact's pixel, and a prior that a contact's centre is near ``rest_height`` (a box landing
-  on an edge or corner sits higher: :data:`CONTACT_LIFT`);
+  (:func:`_contact`, a frame that still follows the flight's parabola moved into the flight), a first guess.
+  Between two contacts the centre flies a ballistic arc (horizontal motion uniform, drag aside), the throw's first
+  flight the arc that ends at the first contact; every contact's 3-D point and time and the first flight's velocity
+  are fitted at once to the flights' pixels, each contact's pixel and time, and a prior that a contact's centre is
+  near ``rest_height`` (a box landing on an edge or corner sits higher: :data:`CONTACT_LIFT`; a centre sinks lower
+  only as far as the object squashes: :data:`CONTACT_SINK`);
 - **ground frames** (the object lies, rolls, slides or rocks between flights, :data:`BOUNCE_S`): its centre is
   ``rest_height`` up, so the ray meets that plane at the centre itself (a 5-frame running median against a box
   that rocks onto an edge, which lifts it a little).
@@ -25,11 +26,12 @@ A flight that never lands, and a centre placed where no throw could be, are left
 
 **Measured, and not yet good enough on video.** On inline scenes (``tests/test_floor.py``: a throw that turns at
 every bounce, four cameras) the heights are under a centimetre RMS from exact pixels and under 3 cm with marks
-clicked a pixel off. On rendered video (``scripts/floor_sweep.py``, 20 development clips of another seed than the
-sweep's, marks clicked a pixel off) the heights are 25 mm RMS with each clip's median removed from the renderer's
-own pixels and 53 mm from the tracker's (the mean silhouette's one scale: 173 mm on the same clips); on 20 clips of
-the sweep's seed, measured once, 78 mm (190), most from the high cameras. What is left: the tracker's pixels at the
-bounces, and low hops the image's curvature does not find (their frames are then taken as on the ground).
+clicked a pixel off. On rendered video (``scripts/floor_sweep.py --per-family 5 --seed 2000``: 20 development clips
+of another seed than the sweep's, marks clicked a pixel off) the heights are 40 mm RMS with each clip's median
+removed from the tracker's pixels (70 mm while each contact's time stayed where the image tracks meet; the mean
+silhouette's one scale: 74 mm), 30 mm from the renderer's own pixels, and 11 mm through the exact camera at each
+frame's true depth. What is left: the first flight's depth (no contact before it) and the tracker's pixels at
+speed; low hops the image's curvature does not find are taken as on the ground.
 """
 
 from __future__ import annotations
@@ -283,8 +285,15 @@ EXTEND_PX = 1.5
 """A frame after a flight still flies while its image row lies within this many pixels of the flight's parabola
 (the phases' curvature blurs a flight's last frames into the bounce)."""
 CONTACT_LIFT = 0.5
-"""A contact's centre height prior: ``rest_height`` with a spread of this share of it (a box that lands on an edge or
-a corner touches with its centre up to 0.41 or 0.73 of its half-edge higher than when it lies flat)."""
+"""A contact's centre height prior: ``rest_height`` with a spread of this share of it above (a box that lands on an
+edge or a corner touches with its centre up to 0.41 or 0.73 of its half-edge higher than when it lies flat)."""
+CONTACT_SINK = 0.15
+"""The same prior's spread below ``rest_height``, a share of it: a centre sinks below its resting height only as far
+as the object gives (a ball's squash), so a contact placed lower is held back more than one placed higher."""
+CONTACT_S = 0.03
+"""Seconds: the spread of a contact's time about where the image tracks on either side meet (:func:`_contact`). The
+fit moves it: a flight's height between two contacts is ``g/2 (t - t_a)(t_b - t)`` on top of theirs, so a frame's
+error in one contact's time is centimetres at the flight's top."""
 CONTACT_PX = 3.0
 """The spread of a contact's pixel where the image tracks of the flights on either side meet, pixels (the bounce
 itself is blurred over the frames between)."""
@@ -359,15 +368,15 @@ def _contacts(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, arcs:
 def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights: list[Flight],
            contacts: list[tuple[float, np.ndarray]], rest_height: float) -> list[np.ndarray]:
     """Each flight's centres (len(frames), 3), every flight and contact fitted at once through the camera: the
-    unknowns are each contact's 3-D point and the velocity of each flight with no contact before it; a flight
-    between two contacts is the ballistic arc through both (its horizontal motion uniform, its height a parabola in
-    g), one without the arc that ends at its contact. Least squares on the flights' pixels (robust beyond
-    :data:`TRACK_PX`), each contact's pixel (:data:`CONTACT_PX`) and its centre's height (``rest_height``, spread
-    :data:`CONTACT_LIFT` of it): the contacts, the arcs' curvature and the continuity between them weighed
-    together."""
+    unknowns are each contact's 3-D point and time and the velocity of each flight with no contact before it; a
+    flight between two contacts is the ballistic arc through both (its horizontal motion uniform, its height a
+    parabola in g), one without the arc that ends at its contact. Least squares on the flights' pixels (robust
+    beyond :data:`TRACK_PX`), each contact's pixel (:data:`CONTACT_PX`), its time (:data:`CONTACT_S`) and its
+    centre's height (``rest_height``, spread :data:`CONTACT_LIFT` of it above, :data:`CONTACT_SINK` below): the
+    contacts, the arcs' curvature and the continuity between them weighed together."""
     from scipy.optimize import least_squares
 
-    tc = np.array([c[0] for c in contacts])
+    seen_t = np.array([c[0] for c in contacts])  # (K,) s, where the image tracks on either side meet
     start = np.array([c[1] for c in contacts], np.float64)  # (K, 3) where each contact's ray meets the rest plane
     seen_c = camera.project(start)
     K = len(contacts)
@@ -375,7 +384,7 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
     ok = [np.isfinite(u[f]) & np.isfinite(v[f]) for _, _, f in flights]
     down = np.array([0.0, 0.0, -0.5 * G])
 
-    def arc(i: int, p: np.ndarray, vel: np.ndarray, times: np.ndarray) -> np.ndarray:
+    def arc(i: int, p: np.ndarray, vel: np.ndarray, tc: np.ndarray, times: np.ndarray) -> np.ndarray:
         a, b, _ = flights[i]
         if a is None:
             dt = (times - tc[b])[:, None]
@@ -384,15 +393,18 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
         sag = 0.5 * G * (times - tc[a]) * (tc[b] - times)
         return (1 - w) * p[a] + w * p[b] + np.column_stack([0 * sag, 0 * sag, sag])
 
-    def unpack(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return x[: 3 * K].reshape(K, 3), x[3 * K:].reshape(len(free), 3)
+    def unpack(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(K, 3) contact points, (len(free), 3) velocities, (K,) contact times."""
+        return x[: 3 * K].reshape(K, 3), x[3 * K: -K].reshape(len(free), 3), x[-K:]
 
     def residual(x: np.ndarray) -> np.ndarray:
-        p, vel = unpack(x)
-        parts = [(camera.project(arc(i, p, vel, t[f][o])) - np.column_stack([u[f][o], v[f][o]])).ravel()
+        p, vel, tc = unpack(x)
+        parts = [(camera.project(arc(i, p, vel, tc, t[f][o])) - np.column_stack([u[f][o], v[f][o]])).ravel()
                  for i, ((_, _, f), o) in enumerate(zip(flights, ok)) if o.any()]
         parts.append(((camera.project(p) - seen_c) / CONTACT_PX * TRACK_PX).ravel())
-        parts.append((p[:, 2] - rest_height) / (CONTACT_LIFT * rest_height) * TRACK_PX)
+        lift = p[:, 2] - rest_height
+        parts.append(lift / (np.where(lift < 0, CONTACT_SINK, CONTACT_LIFT) * rest_height) * TRACK_PX)
+        parts.append((tc - seen_t) / CONTACT_S * TRACK_PX)
         return np.concatenate(parts)
 
     # Each free flight's velocity, guessed two ways: fitted alone at its contact, and at that contact's depth.
@@ -403,18 +415,17 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
         guesses = [np.zeros(3)]
         if len(seen) >= 3:
             guesses = []
-            for alone in (_fit_arc(camera, t[seen], u[seen], v[seen], start[b], tc[b]),
+            for alone in (_fit_arc(camera, t[seen], u[seen], v[seen], start[b], seen_t[b]),
                           camera.position + camera.depth_of(start[b:b + 1])[0] * camera.rays(u[seen], v[seen])):
-                dt = t[seen] - tc[b]
+                dt = t[seen] - seen_t[b]
                 drop = alone - start[b] - down * dt[:, None] ** 2
                 guesses.append(np.linalg.lstsq(dt[:, None], drop, rcond=None)[0][0])
         options.append(guesses)
-    starts = [np.concatenate([start.ravel(), *g]) for g in itertools.product(*options)] if options else \
-        [start.ravel()]
+    starts = [np.concatenate([start.ravel(), *g, seen_t]) for g in itertools.product(*options)]
     best = min((least_squares(residual, x0, loss="huber", f_scale=TRACK_PX, x_scale="jac") for x0 in starts),
                key=lambda f: f.cost)
-    p, vel = unpack(best.x)
-    return [arc(i, p, vel, t[f]) for i, (_, _, f) in enumerate(flights)]
+    p, vel, tc = unpack(best.x)
+    return [arc(i, p, vel, tc, t[f]) for i, (_, _, f) in enumerate(flights)]
 
 
 def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_height: float
