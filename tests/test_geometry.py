@@ -63,3 +63,20 @@ def test_a_clip_without_a_free_flight_or_without_the_ground_says_which():
 def test_a_box_is_sized_by_its_mean_silhouette():
     assert size.apparent_size("sphere", (0.067,)) == 0.067
     assert size.apparent_size("box", (0.2, 0.2, 0.2)) == pytest.approx(0.2 * math.sqrt(6 / math.pi))
+
+
+def test_a_tracker_jump_mid_fall_does_not_split_the_flight_when_a_gap_is_allowed():
+    """A fall at 30 frames a second, its image row 4 px off in one frame (a centroid's jump at speed): read as is,
+    the curvature breaks and the fall is two flights (a landing in mid-air); with ``gap_s`` it stays one flight,
+    and a bounce's kink still ends it."""
+    t = np.arange(40) / FPS
+    fall = np.minimum(t, 0.8)
+    v = 100.0 + 0.5 * 9.81 / 0.01 * fall**2  # rows: g at 1 cm a pixel, until a bounce at 0.8 s
+    v[t > 0.8] = v[t <= 0.8][-1] - 300.0 * (t[t > 0.8] - 0.8) + 0.5 * 981.0 * (t[t > 0.8] - 0.8) ** 2
+    v[12] -= 4.0
+    scale = np.full(len(t), 0.01)
+    split, _ = geometry.phases(t, v, scale, most=math.inf)
+    whole, _ = geometry.phases(t, v, scale, most=math.inf, gap_s=0.05)
+    assert sum(a[-1] <= 22 for a in split) >= 2, "read as is, the jump breaks the fall"
+    first = next(a for a in whole if a[0] <= 12 <= a[-1])
+    assert first[0] <= 2 and 22 <= first[-1] <= 24, "one flight through the jump, ended at the bounce (frame 24)"

@@ -110,15 +110,18 @@ def _up(tilt: float, roll: float) -> np.ndarray:
     return np.array([math.sin(roll) * math.cos(tilt), math.cos(roll) * math.cos(tilt), math.sin(tilt)])
 
 
-def phases(t: np.ndarray, v: np.ndarray, scale: np.ndarray, most: float = 1.8) -> tuple[list[np.ndarray], np.ndarray]:
+def phases(t: np.ndarray, v: np.ndarray, scale: np.ndarray, most: float = 1.8, gap_s: float = 0.0
+           ) -> tuple[list[np.ndarray], np.ndarray]:
     """The free flights and the ground frames, from the image alone.
 
     ``t`` (n,) seconds, ``v`` (n,) image rows, ``scale`` (n,) metres per pixel at the object (its size over its
     apparent diameter). A frame whose 5-frame image curvature, in metres, is a downward acceleration between 0.35 g
     and 1.8 g is in flight (a camera tilted 70 degrees still sees a third of g); one whose curvature is within
     0.25 g of none is rolling, sliding or resting: on the ground. ``most``: the upper bound, in g (infinite where
-    ``scale`` only bounds the true scale from above). Returns the flights (index arrays, each a run of flight frames
-    widened by a frame on each side, at least :data:`MIN_ARC` long) and the ground mask (n,) bool."""
+    ``scale`` only bounds the true scale from above). ``gap_s``: seconds of other frames between two runs of flight
+    frames that make them one flight (a tracker's jump breaks the curvature for a frame or two; a bounce's kink spans
+    more). Returns the flights (index arrays, each a run of flight frames widened by a frame on each side, at least
+    :data:`MIN_ARC` long) and the ground mask (n,) bool."""
     n = len(t)
     ratio = np.full(n, np.nan)
     for i in range(2, n - 2):
@@ -126,7 +129,12 @@ def phases(t: np.ndarray, v: np.ndarray, scale: np.ndarray, most: float = 1.8) -
         if np.isfinite(v[w]).all():
             ratio[i] = 2 * np.polyfit(t[w] - t[i], v[w], 2)[0] * scale[i] / G  # image rows grow downwards
     flight = (ratio > 0.35) & (ratio < most)
-    kink = ratio < -0.35
+    gap = int(round(gap_s / float(np.median(np.diff(t))))) if n > 1 and gap_s > 0 else 0
+    runs = _runs(flight)
+    for before, after in zip(runs, runs[1:]):
+        if after[0] - before[-1] - 1 <= gap:
+            flight[before[-1] + 1: after[0]] = True
+    kink = (ratio < -0.35) & ~flight
     arcs = []
     for run in _runs(flight):
         lo, hi = run[0], run[-1]
