@@ -97,9 +97,15 @@ def match(pixels: np.ndarray, points: np.ndarray, width: int, height: int, sourc
     symmetric layout)."""
     pixels, points = np.asarray(pixels, np.float64), np.asarray(points, np.float64)
     where = f"floor marks{' of ' + source if source else ''}"
-    if len(pixels) != len(points):
+    if len(pixels) < len(points):
         raise ConfigError(f"{where}: {len(pixels)} marks found in the video but {len(points)} positions given; give "
-                          "one position per mark in view, or their pixels (header u,v,x,y)")
+                          "one position per mark in view, or their pixels (header u,v,x,y). A mark seen at a grazing "
+                          "angle (a camera low or level) is too thin to find: tilt the camera down onto the floor or "
+                          "use bigger marks")
+    if len(pixels) > len(points):
+        raise ConfigError(f"{where}: {len(pixels)} marks found in the video but {len(points)} positions given; give "
+                          "one position per mark in view, or their pixels (header u,v,x,y); nothing else in view "
+                          "may be magenta")
     if len(points) <= MIN_MARKS:
         raise ConfigError(f"{where}: {len(points)} marks; finding them by colour needs five or more (four fit any "
                           "pairing of pixels and positions), or give their pixels (header u,v,x,y)")
