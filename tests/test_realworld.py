@@ -374,3 +374,35 @@ def test_the_floor_models_labels_through_floor_marks_read_back_and_show_as_count
     right = sum(r.correct for r in RENDERED[:3] if r.label == "light")
     assert light["floor"].startswith(f"{right}/{sum(r.label == 'light' for r in RENDERED[:3])} (")
     assert "floor marks" in table.columns["floor"] and heavy["class"] == "heavy"
+
+
+def test_two_chapters_rendering_the_same_set_at_once_render_each_video_once(tmp_path, monkeypatch):
+    """Two chapters of a build ask for the book's videos at the same moment: each video is made once, the second
+    waits for it (``cache.one_maker``) and reads it. A fake renderer counts the calls and is slow enough to overlap."""
+    import threading
+    import time
+
+    from study.methods import videos
+
+    calls: list[str] = []
+
+    def fake_render(model, qpos, qvel, out, cfg=None, reuse=True):
+        calls.append(str(out))
+        time.sleep(0.2)
+        out = os.fspath(out)
+        for path in (out, out[: -len(".mp4")] + ".csv"):
+            with open(path, "w") as f:
+                f.write("made once\n")
+
+    monkeypatch.setattr(videos.render, "render", fake_render)
+    cfg = synth.SynthConfig.preset("smoke")
+    rcfg = render.RenderConfig(width=160, height=120, duration=0.8, shadows=False)
+    made = []
+    both = [threading.Thread(target=lambda: made.append(videos.render_set(cfg, 2, 1000, tmp_path, rcfg, progress=False)))
+            for _ in range(2)]
+    for t in both:
+        t.start()
+    for t in both:
+        t.join()
+    assert len(made) == 2 and [v.path for v in made[0]] == [v.path for v in made[1]]
+    assert sorted(calls) == sorted({v.path.as_posix() for v in made[0]}), "each video rendered once, not twice"

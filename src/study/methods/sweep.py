@@ -213,27 +213,35 @@ def sweep_set(cfg, per_family: int, seed: int, out_dir: str | Path, progress: bo
         v = videos.Video(folder / name, label, color=shot.colour, object_size=size, rest_height=cfg.shape.rest_height,
                          truth=(folder / name).with_suffix(".csv"), info={"family": shot.family, **asdict(shot)})
         clips.append(Clip(v, shot))
-    todo = [(c, i, cam, xy) for c, (i, _, cam, xy) in zip(clips, plan)
-            if not (c.video.path.is_file() and c.video.truth.is_file())]
-    times = _read_times(folder)
+    todo = [(c, i, cam, xy) for c, (i, _, cam, xy) in zip(clips, plan) if not videos.rendered(c.video)]
     with Progress("render the camera sweep", total=len(todo), show=progress, unit="clip") as bar:
         for c, i, cam, xy in todo:
-            cpu, wall = time.process_time(), time.perf_counter()
-            _, qpos, qvel = videos.throw(cfg, params, i)
-            model = marked.with_marks(marked.throw_xml(cfg, params, i), xy)  # the same throw, its marks drawn
-            dress(model, c.shot, cam)
-            rcfg = render.RenderConfig(width=c.shot.width, height=c.shot.height_px, fps=c.shot.fps, duration=duration,
-                                       blur_subframes=2, noise_std=2.0, jpeg_quality=85, seed=seed + i)
-            render.render(model, qpos, qvel, c.video.path, rcfg)
-            times[c.video.path.name] = {"cpu_s": round(time.process_time() - cpu, 2),
-                                        "wall_s": round(time.perf_counter() - wall, 2)}
-            cache.write_text_atomic(folder / TIMES, json.dumps(times, indent=1, sort_keys=True))
+            with cache.one_maker(c.video.path):  # two chapters of a build render it once
+                if not videos.rendered(c.video):
+                    _render_clip(cfg, params, i, c.shot, cam, xy, c.video.path, duration, seed)
             bar.update()
     manifest = "file,label,family,color,object_size\n" + "".join(
         f"{c.video.path.name},{c.video.label},{c.shot.family},{c.shot.colour},{size:.6g}\n" for c in clips)
     if not (folder / "MANIFEST.csv").is_file() or (folder / "MANIFEST.csv").read_text() != manifest:
         cache.write_text_atomic(folder / "MANIFEST.csv", manifest)
     return clips
+
+
+def _render_clip(cfg, params: dict, i: int, shot: Shot, cam: Camera, xy: np.ndarray, path: Path, duration: float,
+                 seed: int) -> None:
+    """Render throw ``i`` of ``params`` through ``shot``'s camera ``cam`` with its floor marks at ``xy`` (k, 2)
+    metres to ``path``, and add its rendering time to the folder's :data:`TIMES`."""
+    cpu, wall = time.process_time(), time.perf_counter()
+    _, qpos, qvel = videos.throw(cfg, params, i)
+    model = marked.with_marks(marked.throw_xml(cfg, params, i), xy)  # the same throw, its marks drawn
+    dress(model, shot, cam)
+    rcfg = render.RenderConfig(width=shot.width, height=shot.height_px, fps=shot.fps, duration=duration,
+                               blur_subframes=2, noise_std=2.0, jpeg_quality=85, seed=seed + i)
+    render.render(model, qpos, qvel, path, rcfg)
+    spent = {"cpu_s": round(time.process_time() - cpu, 2), "wall_s": round(time.perf_counter() - wall, 2)}
+    with cache.one_maker(path.parent / TIMES):  # read again: another process may have added its clips
+        times = {**_read_times(path.parent), path.name: spent}
+        cache.write_text_atomic(path.parent / TIMES, json.dumps(times, indent=1, sort_keys=True))
 
 
 def render_times(clips: list[Clip]) -> dict[str, dict[str, float]]:

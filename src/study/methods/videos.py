@@ -234,6 +234,11 @@ def throw(cfg, params: dict[str, np.ndarray], i: int, max_speed: float = 2.0):
     return model, qpos, qvel
 
 
+def rendered(v: Video) -> bool:
+    """Whether ``v``'s video and its truth are both on disk (each is written atomically)."""
+    return v.path.is_file() and v.truth.is_file()
+
+
 def render_set(
     cfg,
     n_per_class: int,
@@ -263,10 +268,12 @@ def render_set(
         videos.append(Video(folder / name, label, color="orange", object_size=size, rest_height=cfg.shape.rest_height,
                             truth=(folder / name).with_suffix(".csv"), info={"mass": float(params["mass"][i]),
                             "restitution": float(params["restitution"][i])}))
-    todo = [i for i, v in enumerate(videos) if not (v.path.is_file() and v.truth.is_file())]
+    todo = [i for i, v in enumerate(videos) if not rendered(v)]
     with Progress("render videos", total=len(todo), show=progress, unit="video") as bar:
         for i in todo:
-            render.render(*throw(cfg, params, i, max_speed), videos[i].path, rcfg)
+            with cache.one_maker(videos[i].path):  # two chapters of a build render it once
+                if not rendered(videos[i]):
+                    render.render(*throw(cfg, params, i, max_speed), videos[i].path, rcfg)
             bar.update()
     manifest = "file,label\n" + "".join(f"{v.path.name},{v.label}\n" for v in videos)
     if not (folder / "MANIFEST.csv").is_file() or (folder / "MANIFEST.csv").read_text() != manifest:
