@@ -144,3 +144,29 @@ def test_a_contact_time_the_image_misjudges_by_two_frames_is_fitted_again_from_t
     frames = np.arange(1, len(t) - 1)
     xyz = floor._joint(cam, t, uv[:, 0], uv[:, 1], [(0, 1, frames)], contacts, REST)[0]
     assert np.sqrt(np.mean((xyz[:, 2] - path[frames, 2]) ** 2)) < 0.005
+
+
+@pytest.mark.parametrize("late", [2, 1, -2])
+def test_frames_split_at_a_misjudged_bounce_are_placed_by_the_fitted_contact_not_below_the_floor(late):
+    """Two hops, the bounce between them seen ``late`` frames off, and the frames split between the hops at that
+    time as the image gives it (``_contacts`` does): once the fit moves the contact back, the frames on the wrong
+    side of it are at the contact, not on their hop's parabola extended past it (which ran 9 cm below the floor)."""
+    fps, t1, t2 = 60.0, 0.5, 0.9
+    t = np.arange(int(t2 * fps) + 1) / fps
+    a, b, c = np.array([0.0, 0.0, REST]), np.array([0.8, 0.3, REST]), np.array([1.3, 0.5, REST])
+
+    def hop(p, q, ta, tb, times):
+        w = ((times - ta) / (tb - ta))[:, None]
+        return (1 - w) * p + w * q + np.column_stack([0 * w[:, 0], 0 * w[:, 0], 0.5 * G * (times - ta) * (tb - times)])
+
+    path = np.where((t <= t1)[:, None], hop(a, b, 0.0, t1, t), hop(b, c, t1, t2, t))
+    cam = scene(1.2, 20.0, 30.0, path)
+    uv = cam.project(path)
+    seen = t1 + late / fps
+    contacts = [(0.0, a), (seen, b), (t2, c)]
+    flights = [(0, 1, np.flatnonzero((t > 0.0) & (t <= seen))), (1, 2, np.flatnonzero((t > seen) & (t < t2)))]
+    out = floor._joint(cam, t, uv[:, 0], uv[:, 1], flights, contacts, REST)
+    err = np.concatenate([xyz[:, 2] - path[f, 2] for (_, _, f), xyz in zip(flights, out)])
+    z = np.concatenate([xyz[:, 2] for xyz in out])
+    assert z.min() > REST - 0.005, "no frame placed below the floor beside the bounce"
+    assert np.sqrt(np.mean(err**2)) < 0.012

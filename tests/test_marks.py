@@ -57,6 +57,8 @@ def test_a_layout_that_looks_the_same_turned_too_few_marks_or_a_miscount_is_refu
         marks.match(px[:4], marklayout.LAYOUT[:4], cam.width, cam.height)
     with pytest.raises(ConfigError, match="5 marks found in the video but 6 positions.*tilt the camera down"):
         marks.match(px[:5], marklayout.LAYOUT, cam.width, cam.height)  # a missing mark: why a camera misses one
+    with pytest.raises(ConfigError, match="no magenta mark found in the video; check that the marks are in view"):
+        marks.match(px[:0], marklayout.LAYOUT, cam.width, cam.height)
     with pytest.raises(ConfigError, match="6 marks found in the video but 5 positions.*nothing else in view"):
         marks.match(px[:6], marklayout.LAYOUT[:5], cam.width, cam.height)
 

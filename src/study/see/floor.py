@@ -30,7 +30,7 @@ clicked a pixel off. On rendered video (``scripts/floor_sweep.py --per-family 5 
 of another seed than the sweep's, marks clicked a pixel off) the heights are 36 mm RMS with each clip's median
 removed from the tracker's pixels (the mean silhouette's one scale: 74 mm), 30 mm from the renderer's own pixels,
 and 11 mm through the exact camera at each frame's true depth; on 12 clips of a third seed (``--per-family 3 --seed
-2001``), 62 mm, most of it two clips (125 and 96 mm; the others 23-53), the first where a tracker's jump
+2001``), 64 mm, most of it two clips (140 and 96 mm; the others 23-53), the first where a tracker's jump
 mid-fall still ends the first flight early.
 What is left: the first flight's depth (no contact before it), the tracker's pixels at speed, and a box whose
 centre stands on an edge between flights (read as on the floor, at rest height).
@@ -228,7 +228,9 @@ MAX_DISTANCE = 30.0
 FLIGHT_GAP_S = 0.05
 """Seconds of frames whose curvature does not read as flight between two that do, still one flight: at speed the
 tracker's centroid jumps a few pixels, which at 30 frames a second breaks a fall's curvature for a frame or two (a
-fall then read as landing early, its frames put on the floor, a metre off); a bounce's kink spans more frames."""
+fall then read as landing early, its frames put on the floor, a metre off). A bounce's kink spans more frames: about
+3 of the 5-frame curvature on rows as they are (30 frames a second: this is 2), more on the rows :data:`SMOOTH_S`
+smooths (from about 35 frames a second)."""
 SMOOTH_S = 0.15
 """Seconds of the image rows' running quadratic fit before the flights are found: a tracker's pixel of noise,
 twice differentiated over the 5 frames ``phases`` reads, is about half of g at 60 frames a second."""
@@ -392,6 +394,9 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
 
     def arc(i: int, p: np.ndarray, vel: np.ndarray, tc: np.ndarray, times: np.ndarray) -> np.ndarray:
         a, b, _ = flights[i]
+        # a frame the fit moved a contact past is at that contact, not on this parabola extended past it (below
+        # the floor); placing it on the next flight instead was exact on inline hops but unstable on video
+        times = np.clip(times, -math.inf if a is None else tc[a], tc[b])
         if a is None:
             dt = (times - tc[b])[:, None]
             return p[b] + vel[free.index(i)] * dt + down * dt**2
@@ -401,7 +406,8 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
 
     def unpack(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(K, 3) contact points, (len(free), 3) velocities, (K,) contact times."""
-        return x[: 3 * K].reshape(K, 3), x[3 * K: -K].reshape(len(free), 3), x[-K:]
+        m = 3 * K + 3 * len(free)
+        return x[: 3 * K].reshape(K, 3), x[3 * K: m].reshape(len(free), 3), x[m: m + K]
 
     def residual(x: np.ndarray) -> np.ndarray:
         p, vel, tc = unpack(x)

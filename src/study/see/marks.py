@@ -97,6 +97,9 @@ def match(pixels: np.ndarray, points: np.ndarray, width: int, height: int, sourc
     symmetric layout)."""
     pixels, points = np.asarray(pixels, np.float64), np.asarray(points, np.float64)
     where = f"floor marks{' of ' + source if source else ''}"
+    if not len(pixels):
+        raise ConfigError(f"{where}: no magenta mark found in the video; check that the marks are in view and magenta "
+                          "(study.see.marklayout.MARK_HSV), or give their pixels (header u,v,x,y)")
     if len(pixels) < len(points):
         raise ConfigError(f"{where}: {len(pixels)} marks found in the video but {len(points)} positions given; give "
                           "one position per mark in view, or their pixels (header u,v,x,y). A mark seen at a grazing "
