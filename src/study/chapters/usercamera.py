@@ -193,6 +193,11 @@ def _drag_table(cs: CameraSweep) -> Table:
 # The chapter's result
 
 
+def _mm_off(r: camera_cost.PathResult) -> str:
+    """A path's height error in words: millimetres RMS with each clip's median removed, or that it gave none."""
+    return "no heights" if math.isnan(r.rms_centred_mm) else f"{r.rms_centred_mm:.0f} mm off"
+
+
 @dataclass(frozen=True)
 class UserCamera:
     """Everything the chapter shows: its numbers, its tables and sentences, its figures' data."""
@@ -261,13 +266,10 @@ class UserCamera:
         heights'."""
         res = self.camera.recommended.results["all"]
         fl, default = res[camera_cost.FLOOR_PATH], res[camera_cost.DEFAULT_PATH]
-        mm = "no heights" if math.isnan(fl.rms_centred_mm) else f"{fl.rms_centred_mm:.0f} mm off"
-        found = res.get(camera_cost.FOUND)
-        found_mm = ("" if found is None else "; with the marks found by their colour, not clicked, "
-                    + ("no heights" if math.isnan(found.rms_centred_mm) else
-                       f"{found.rms_centred_mm:.0f} mm" + (f" ({found.no_heights} clips without)"
-                                                           if found.no_heights else "")))
-        words = (f"with {len(marklayout.LAYOUT)} marks taped around the throw, the heights are {mm} (one "
+        found = res.get(camera_cost.FOUND)  # measured where the clips show their marks
+        found_mm = ("" if found is None else f"; with the marks found by their colour, not clicked, {_mm_off(found)}"
+                    + (f" ({found.no_heights} clips without)" if found.no_heights else ""))
+        words = (f"with {len(marklayout.LAYOUT)} marks taped around the throw, the heights are {_mm_off(fl)} (one "
                  f"scale: {default.rms_centred_mm:.0f} mm){found_mm}; the recommended model labels "
                  f"{pct_ci(fl.accuracy)} "
                  f"right ({pct_ci(default.accuracy)} with one scale)")

@@ -100,21 +100,12 @@ def match(pixels: np.ndarray, points: np.ndarray, width: int, height: int, sourc
     if not len(pixels):
         raise ConfigError(f"{where}: no magenta mark found in the video; check that the marks are in view and magenta "
                           "(study.see.marklayout.MARK_HSV), or give their pixels (header u,v,x,y)")
-    if len(pixels) < len(points):
+    if len(pixels) != len(points):
+        why = ("a mark seen at a grazing angle (a camera low or level) is too thin to find: tilt the camera down onto "
+               "the floor or use bigger marks" if len(pixels) < len(points) else "nothing else in view may be magenta")
         raise ConfigError(f"{where}: {len(pixels)} marks found in the video but {len(points)} positions given; give "
-                          "one position per mark in view, or their pixels (header u,v,x,y). A mark seen at a grazing "
-                          "angle (a camera low or level) is too thin to find: tilt the camera down onto the floor or "
-                          "use bigger marks")
-    if len(pixels) > len(points):
-        raise ConfigError(f"{where}: {len(pixels)} marks found in the video but {len(points)} positions given; give "
-                          "one position per mark in view, or their pixels (header u,v,x,y); nothing else in view "
-                          "may be magenta")
-    if len(points) <= MIN_MARKS:
-        raise ConfigError(f"{where}: {len(points)} marks; finding them by colour needs five or more (four fit any "
-                          "pairing of pixels and positions), or give their pixels (header u,v,x,y)")
-    if len(points) > MAX_MARKS:
-        raise ConfigError(f"{where}: {len(points)} marks; finding them by colour pairs at most {MAX_MARKS}; give "
-                          "their pixels (header u,v,x,y)")
+                          f"one position per mark in view, or their pixels (header u,v,x,y); {why}")
+    check_pairable(len(points), where)
     check_spread(Floor(pixels, points, source))
     scored = []
     for order in itertools.permutations(range(len(points))):
@@ -147,14 +138,20 @@ def read(path: str | Path) -> Floor:
     only, their pixels to be found in the video by :func:`located`), with as many positions as finding them by colour
     can pair (five to :data:`MAX_MARKS`); :class:`ConfigError` naming the file and what to write."""
     floor = read_floor(path)
-    n = len(floor.points)
-    if needs_finding(floor) and n <= MIN_MARKS:
-        raise ConfigError(f"floor file {path}: {n} positions; marks found by their colour need five or more "
-                          "(four fit any pairing with the pixels), or give their pixels (header u,v,x,y)")
-    if needs_finding(floor) and n > MAX_MARKS:
-        raise ConfigError(f"floor file {path}: {n} positions; marks found by their colour are paired "
-                          f"{MAX_MARKS} at most; give their pixels (header u,v,x,y)")
+    if needs_finding(floor):
+        check_pairable(len(floor.points), f"floor file {path}")
     return floor
+
+
+def check_pairable(n: int, where: str) -> None:
+    """:class:`ConfigError` (``where`` names the file or clip) unless ``n`` positions can be paired with marks found
+    by colour: five to :data:`MAX_MARKS`."""
+    if n <= MIN_MARKS:
+        raise ConfigError(f"{where}: {n} positions; marks found by their colour need five or more (four fit any "
+                          "pairing with the pixels), or give their pixels (header u,v,x,y)")
+    if n > MAX_MARKS:
+        raise ConfigError(f"{where}: {n} positions; marks found by their colour are paired {MAX_MARKS} at most; "
+                          "give their pixels (header u,v,x,y)")
 
 
 def needs_finding(floor: Floor) -> bool:
