@@ -221,7 +221,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
               track.track_video(path, track_config or TrackConfig()))  # pixels: scaled once, below
     rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0
     if floor is not None:  # the camera the floor marks give: each frame's own depth
-        traj, cal = on_floor(pixels, floor, rest)
+        traj, cal = on_floor(pixels, floor, rest, object_shape.mean_size() if object_shape else None)
         how = (f"{cal.note()}; each frame's centre from the contacts and the flights between them, the centre "
                f"{rest:.3f} m up at rest")
     else:

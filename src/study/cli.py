@@ -327,7 +327,7 @@ def _on_floor(a: argparse.Namespace):
         raise ConfigError("--floor: give the object's size (--object-size, and --object-shape) for the height of its "
                           "centre when it lies on the floor")
     found = located(marks, a.video)  # before the tracking
-    traj, cal = on_floor(track.track_video(a.video, _track_config(a)), found, shape.rest_height())
+    traj, cal = on_floor(track.track_video(a.video, _track_config(a)), found, shape.rest_height(), shape.mean_size())
     print(f"{a.video}: {cal.note()}")
     return traj
 

@@ -18,6 +18,10 @@ With the camera known, a frame's ray fixes the centre up to its depth, and the t
   are fitted at once to the flights' pixels, each contact's pixel and time, and a prior that a contact's centre is
   near ``rest_height`` (a box landing on an edge or corner sits higher: :data:`CONTACT_LIFT`; a centre sinks lower
   only as far as the object squashes: :data:`CONTACT_SINK`);
+- **the apparent size**, a weak extra measurement of a flight frame's depth: the focal length times the object's
+  mean-silhouette diameter over the blob's (:data:`SIZE_SD`), up to one bias for the whole clip that the fit finds
+  (:data:`SIZE_BIAS`). It holds a flight's depth where its pixels do not: a camera low over the floor, a tracker's
+  jump that cuts a fall short;
 - **ground frames** (the object lies, rolls, slides or rocks between flights, :data:`BOUNCE_S`): its centre is
   ``rest_height`` up, so the ray meets that plane at the centre itself (a 5-frame running median against a box
   that rocks onto an edge, which lifts it a little).
@@ -27,11 +31,10 @@ A flight that never lands, and a centre placed where no throw could be, are left
 **Measured, and not yet good enough on video.** On inline scenes (``tests/test_floor.py``: a throw that turns at
 every bounce, four cameras) the heights are under a centimetre RMS from exact pixels and under 3 cm with marks
 clicked a pixel off. On rendered video (``scripts/floor_sweep.py --per-family 5 --seed 2000``: 20 development clips
-of another seed than the sweep's, marks clicked a pixel off) the heights are 36 mm RMS with each clip's median
-removed from the tracker's pixels (the mean silhouette's one scale: 74 mm), 30 mm from the renderer's own pixels,
-and 11 mm through the exact camera at each frame's true depth; on 12 clips of a third seed (``--per-family 3 --seed
-2001``), 64 mm, most of it two clips (140 and 96 mm; the others 23-53), the first where a tracker's jump
-mid-fall still ends the first flight early.
+of another seed than the sweep's, marks clicked a pixel off) the heights are 33 mm RMS with each clip's median
+removed from the tracker's pixels (36 mm without the apparent size; the mean silhouette's one scale: 74 mm), and
+11 mm through the exact camera at each frame's true depth; on 12 clips of a third seed (``--per-family 3 --seed
+2001``), 48 mm (64 mm without the apparent size), most of it one high camera's clip at 100 mm (the others 9-51).
 What is left: the first flight's depth (no contact before it), the tracker's pixels at speed, and a box whose
 centre stands on an edge between flights (read as on the floor, at rest height).
 """
@@ -46,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from study.core.errors import ConfigError, DataError
+from study.core.errors import ConfigError, DataError, check_range
 from study.see.camera import Camera
 from study.see.geometry import G, GeometryError, phases
 from study.see.ground import DEFAULT_FOVY, _on_plane, camera_from_floor
@@ -307,6 +310,15 @@ CONTACT_PX = 3.0
 itself is blurred over the frames between)."""
 TRACK_PX = 2.0
 """Beyond this many pixels a flight frame's misfit counts linearly, not squared (a tracker's jump)."""
+SIZE_SD = 0.1
+"""The spread of a flight frame's depth from its apparent size (the focal length times the object's mean-silhouette
+diameter over the blob's, :func:`on_floor`) about the true depth times the clip's own bias, as a share: a tumbling
+box shows more or less than its mean silhouette (7.5 % in a median frame), and a blob of 15-60 pixels gains or loses
+an edge pixel from frame to frame."""
+SIZE_BIAS = 0.1
+"""The prior spread of a clip's bias in depth from apparent size, as a share (log): the blob's edge moves with the
+lighting, the floor behind and the video's resolution, -9 % to +14 % on 18 development clips (seed 2000), so the
+apparent size says more about how a flight's depth changes than about the depth itself."""
 BOUNCE_S = 0.25
 """Seconds between two flights' frames for one bounce to join them; a longer stretch between is on the ground (a
 slide, a box rocking on its edges), with a landing before it and a take-off after."""
@@ -374,19 +386,23 @@ def _contacts(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, arcs:
 
 
 def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights: list[Flight],
-           contacts: list[tuple[float, np.ndarray]], rest_height: float) -> list[np.ndarray]:
+           contacts: list[tuple[float, np.ndarray]], rest_height: float,
+           sized: np.ndarray | None = None) -> list[np.ndarray]:
     """Each flight's centres (len(frames), 3), every flight and contact fitted at once through the camera: the
     unknowns are each contact's 3-D point and time and the velocity of each flight with no contact before it; a
     flight between two contacts is the ballistic arc through both (its horizontal motion uniform, its height a
     parabola in g), one without the arc that ends at its contact. Least squares on the flights' pixels (robust
     beyond :data:`TRACK_PX`), each contact's pixel (:data:`CONTACT_PX`), its time (:data:`CONTACT_S`) and its
-    centre's height (``rest_height``, spread :data:`CONTACT_LIFT` of it above, :data:`CONTACT_SINK` below): the
-    contacts, the arcs' curvature and the continuity between them weighed together."""
+    centre's height (``rest_height``, spread :data:`CONTACT_LIFT` of it above, :data:`CONTACT_SINK` below), and,
+    given ``sized`` (n,) each frame's depth from its apparent size, metres (NaN where unknown), each flight frame's
+    depth against it (:data:`SIZE_SD`) up to one bias for the clip (an unknown, :data:`SIZE_BIAS`): the contacts,
+    the arcs' curvature, the apparent size and the continuity between them weighed together."""
     from scipy.optimize import least_squares
 
     seen_t = np.array([c[0] for c in contacts])  # (K,) s, where the image tracks on either side meet
     start = np.array([c[1] for c in contacts], np.float64)  # (K, 3) where each contact's ray meets the rest plane
     seen_c = camera.project(start)
+    sized = np.full(len(t), np.nan) if sized is None else np.asarray(sized, np.float64)
     K = len(contacts)
     free = [i for i, (a, _, _) in enumerate(flights) if a is None]  # flights with a velocity of their own
     ok = [np.isfinite(u[f]) & np.isfinite(v[f]) for _, _, f in flights]
@@ -404,22 +420,29 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
         sag = 0.5 * G * (times - tc[a]) * (tc[b] - times)
         return (1 - w) * p[a] + w * p[b] + np.column_stack([0 * sag, 0 * sag, sag])
 
-    def unpack(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(K, 3) contact points, (len(free), 3) velocities, (K,) contact times."""
+    def unpack(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """(K, 3) contact points, (len(free), 3) velocities, (K,) contact times, the apparent size's log bias."""
         m = 3 * K + 3 * len(free)
-        return x[: 3 * K].reshape(K, 3), x[3 * K: m].reshape(len(free), 3), x[m: m + K]
+        return x[: 3 * K].reshape(K, 3), x[3 * K: m].reshape(len(free), 3), x[m: m + K], float(x[m + K])
 
     def residual(x: np.ndarray) -> np.ndarray:
-        p, vel, tc = unpack(x)
+        p, vel, tc, bias = unpack(x)
         parts = [(camera.project(arc(i, p, vel, tc, t[f][o])) - np.column_stack([u[f][o], v[f][o]])).ravel()
                  for i, ((_, _, f), o) in enumerate(zip(flights, ok)) if o.any()]
         parts.append(((camera.project(p) - seen_c) / CONTACT_PX * TRACK_PX).ravel())
         lift = p[:, 2] - rest_height
         parts.append(lift / (np.where(lift < 0, CONTACT_SINK, CONTACT_LIFT) * rest_height) * TRACK_PX)
         parts.append((tc - seen_t) / CONTACT_S * TRACK_PX)
+        for i, ((_, _, f), o) in enumerate(zip(flights, ok)):
+            s = o & np.isfinite(sized[f])
+            if s.any():
+                depth = np.maximum(camera.depth_of(arc(i, p, vel, tc, t[f][s])), 1e-3)
+                parts.append((np.log(depth / sized[f][s]) - bias) / SIZE_SD * TRACK_PX)
+        parts.append(np.array([bias / SIZE_BIAS * TRACK_PX]))
         return np.concatenate(parts)
 
-    # Each free flight's velocity, guessed two ways: fitted alone at its contact, and at that contact's depth.
+    # Each free flight's velocity, guessed two or three ways: fitted alone at its contact, at that contact's depth,
+    # and at the depth its apparent size gives.
     options = []
     for i in free:
         _, b, f = flights[i]
@@ -427,23 +450,27 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
         guesses = [np.zeros(3)]
         if len(seen) >= 3:
             guesses = []
-            for alone in (_fit_arc(camera, t[seen], u[seen], v[seen], start[b], seen_t[b]),
-                          camera.position + camera.depth_of(start[b:b + 1])[0] * camera.rays(u[seen], v[seen])):
+            tries = [_fit_arc(camera, t[seen], u[seen], v[seen], start[b], seen_t[b]),
+                     camera.position + camera.depth_of(start[b:b + 1])[0] * camera.rays(u[seen], v[seen])]
+            if np.isfinite(sized[seen]).sum() >= 3:
+                tries.append(camera.position + np.nanmedian(sized[seen]) * camera.rays(u[seen], v[seen]))
+            for alone in tries:
                 dt = t[seen] - seen_t[b]
                 drop = alone - start[b] - down * dt[:, None] ** 2
                 guesses.append(np.linalg.lstsq(dt[:, None], drop, rcond=None)[0][0])
         options.append(guesses)
-    starts = [np.concatenate([start.ravel(), *g, seen_t]) for g in itertools.product(*options)]
+    starts = [np.concatenate([start.ravel(), *g, seen_t, [0.0]]) for g in itertools.product(*options)]
     best = min((least_squares(residual, x0, loss="huber", f_scale=TRACK_PX, x_scale="jac") for x0 in starts),
                key=lambda f: f.cost)
-    p, vel, tc = unpack(best.x)
+    p, vel, tc, _ = unpack(best.x)
     return [arc(i, p, vel, tc, t[f]) for i, (_, _, f) in enumerate(flights)]
 
 
-def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_height: float
-            ) -> tuple[np.ndarray, np.ndarray]:
+def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_height: float,
+            sized: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Each frame's 3-D centre (n, 3) metres, world (x, y on the floor, z up), from the tracked centre ``u``, ``v``
-    (n,) pixels (NaN where lost) at times ``t`` (n,) s, seen by ``camera``; and the ground mask (n,) bool (frames
+    (n,) pixels (NaN where lost) at times ``t`` (n,) s, seen by ``camera``, and optionally ``sized`` (n,) each
+    frame's depth from its apparent size, metres (NaN where unknown); and the ground mask (n,) bool (frames
     after the last contact, or with no flight seen). NaN rows where the centre was lost or cannot be placed. Raises
     :class:`GeometryError` when no frame's ray meets the rest plane in front of the camera."""
     t, u, v = (np.asarray(a, np.float64) for a in (t, u, v))
@@ -470,7 +497,7 @@ def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_he
         in_flight[frames] = True
     ground = on_plane & ~in_flight  # lying, sliding or rocking on the floor: on the rest plane
     if flights:
-        for (_, _, frames), xyz in zip(flights, _joint(camera, t, u, v, flights, contacts, rest_height)):
+        for (_, _, frames), xyz in zip(flights, _joint(camera, t, u, v, flights, contacts, rest_height, sized)):
             out[frames] = xyz
     smoothed = _median5(np.where(ground[:, None], plane, np.nan)[:, :2])
     out[ground] = np.column_stack([smoothed[ground], np.full(ground.sum(), rest_height)])
@@ -485,15 +512,23 @@ def heights(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_he
     return centres(camera, t, u, v, rest_height)[0][:, 2]
 
 
-def on_floor(traj: Trajectory, floor: Floor, rest_height: float) -> tuple[Trajectory, Calibration]:
+def on_floor(traj: Trajectory, floor: Floor, rest_height: float, size: float | None = None
+             ) -> tuple[Trajectory, Calibration]:
     """``traj`` (a track in pixels of a video of ``traj.width`` x ``traj.height_px``) with each frame's centre height
     in metres through the camera ``floor`` calibrates (:func:`centres`), and that calibration. ``rest_height``: the
-    centre's height when the object lies on the floor, metres."""
+    centre's height when the object lies on the floor, metres; ``size``: the diameter of the disc with the object's
+    mean silhouette area, metres (``ObjectShape.mean_size``), for each frame's depth from the blob's diameter (None:
+    the apparent size unused)."""
     if not traj.width or not traj.height_px:
         raise ConfigError(f"{traj.source}: the track does not say its video's size; track the video itself with "
                           "--floor (a trajectory CSV keeps no frame size)")
     cal = calibrate(floor, traj.width, traj.height_px)
-    xyz, _ = centres(cal.camera, traj.t, traj.u, traj.v, rest_height)
+    sized = None
+    if size is not None:
+        check_range("size (metres)", size, 0.0, 10.0, lo_open=True)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sized = cal.camera.focal * size / np.where(traj.diameter > 0, traj.diameter, np.nan)
+    xyz, _ = centres(cal.camera, traj.t, traj.u, traj.v, rest_height, sized)
     seen = np.isfinite(xyz).all(axis=1)
     if seen.sum() < 3:
         raise GeometryError(f"{traj.source}: fewer than 3 frames could be placed through the floor's camera")
