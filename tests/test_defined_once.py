@@ -55,7 +55,8 @@ def test_the_families_the_sweep_films_are_the_ones_the_results_name_and_any_came
 def test_a_users_paths_are_named_alike_on_the_command_line_in_the_sweep_and_in_the_results():
     assert cli.SCALE_FROM == scale.SCALE_FROM == tuple(camera_cost.ONE_SCALE.values())
     assert cli.SCALE_FROM_DEFAULT == scale.DEFAULT in scale.SCALE_FROM
-    assert camera_cost.PATHS == tuple(p.words for p in paths.PATHS)
+    assert (*camera_cost.PATHS, camera_cost.FOUND) == tuple(p.words for p in paths.PATHS), "the marks found: apart"
+    assert paths.FOUND in paths.FLOOR_KEYS and "floor" in paths.FLOOR_KEYS and len(paths.FLOOR_KEYS) == 2
     assert typing.get_args(paths.PathKey) == (paths.EXACT, paths.KNOWN, *(p.key for p in paths.PATHS))
     from study.chapters import usercamera as page
 

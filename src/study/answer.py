@@ -24,10 +24,11 @@ from study.runs import measured, recommended
 from study.see import track
 from study.see.config import TrackConfig
 from study.see.floor import Floor, on_floor
-from study.see.marks import PATH_KEY as FOUND_PATH, located, needs_finding, read as read_floor
+from study.see.paths import FLOOR_KEYS
+from study.see.marks import located, needs_finding, read as read_floor
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
-from study.trust import CANNOT_TELL, FLOOR, Measurements, Trust, exact_warning, for_answer, measurements, path_of
+from study.trust import CANNOT_TELL, Measurements, Trust, exact_warning, for_answer, measurements, path_of
 
 TENNIS_BALL = ObjectShape("sphere", (0.067,))
 """A tennis ball, 6.7 cm across."""
@@ -129,7 +130,7 @@ class _Model:
     def band_for(self, route: str) -> tuple[float, float] | None:
         """Its cannot-tell band where the answer's heights came by the path it was recommended for (``route``:
         ``trust.path_of``), else None."""
-        served = (recommended.FLOOR if route in (FLOOR, FOUND_PATH) else recommended.ONE_SCALE if route in SCALE_FROM
+        served = (recommended.FLOOR if route in FLOOR_KEYS else recommended.ONE_SCALE if route in SCALE_FROM
                   else None)
         return self.band if served is not None and served == self.recommended_for else None
 

@@ -18,7 +18,7 @@ from study.report.text import pct_ci
 from study.runs import recommended
 from study.runs.measured import Measured, read_shipped
 from study.runs.stats import label_of
-from study.see import marks, paths
+from study.see import paths
 
 CANNOT_TELL = "cannot tell"
 """The answer where p(heavy) falls inside the model's cannot-tell band: neither right nor wrong in a tally."""
@@ -55,10 +55,10 @@ class Trust:
 
 
 def path_of(floor: bool, scale_from: str, metres_per_pixel: float | None, found: bool = False) -> str:
-    """The path an answer's heights came by: :data:`FLOOR` (``study.see.marks.PATH_KEY`` where the marks were
+    """The path an answer's heights came by: :data:`FLOOR` (``study.see.paths.FOUND`` where the marks were
     ``found`` in the video by their colour), :data:`MEASURED_SCALE` or a one-scale path's key."""
     if floor:
-        return marks.PATH_KEY if found else FLOOR
+        return paths.FOUND if found else FLOOR
     return MEASURED_SCALE if metres_per_pixel is not None else scale_from
 
 
@@ -90,7 +90,7 @@ def for_answer(kind: str, path: str, seen: Measurements, band: tuple[float, floa
     measured, source = seen.measured, seen.source
     if path == MEASURED_SCALE:
         return Trust(None, "a scale you measured: the camera sweep measured one scale read off the object", band)
-    words = marks.PATH_WORDS if path == marks.PATH_KEY else next((p.words for p in paths.PATHS if p.key == path), path)
+    words = next((p.words for p in paths.PATHS if p.key == path), path)
     if not measured:
         return Trust(None, f"no build's camera sweep is at hand for the {words} path: build the book to measure it",
                      band)

@@ -26,7 +26,7 @@ from study.methods.recommend import Recommendation, kind, recommend
 from study.report.reported import count, number
 from study.report.text import Table, pct, pct_ci, points
 from study.report.usercamera import Numbers, Sweep, SweepGroup, SweepKey, SweepPath
-from study.see import marklayout, marks, paths
+from study.see import marklayout, paths
 from study.simulate import measure
 from study.simulate.observe import CAMERA_FAMILIES
 
@@ -38,7 +38,7 @@ if TYPE_CHECKING:
 # The camera sweep: a camera nobody measured (study.methods.sweep, study.methods.camera_cost)
 
 PATH_KEYS: dict[str, SweepKey] = {paths.EXACT: paths.EXACT, paths.KNOWN_WORDS: paths.KNOWN,
-                                  **{p.words: p.key for p in paths.PATHS}, marks.PATH_WORDS: marks.PATH_KEY}
+                                  **{p.words: p.key for p in paths.PATHS}}
 """Each path's name in the tables -> its key in the results file."""
 
 

@@ -45,17 +45,18 @@ from study.see.scale import DEFAULT, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 from study.simulate import measure as motion
 
-PATHS: tuple[str, ...] = tuple(p.words for p in paths.PATHS)
-"""The user's paths from pixels to metres by their words, in the order the tables show them (``study.see.paths``)."""
+PATHS: tuple[str, ...] = tuple(p.words for p in paths.PATHS if not p.found)
+"""The user's paths from pixels to metres by their words, in the order the tables show them (``study.see.paths``):
+those measured on every clip (the marks found by colour are :data:`FOUND`)."""
 KNOWN = paths.KNOWN_WORDS
 """The tracker's pixels through the clip's own camera at each frame's true depth (``study.see.gaps.set_camera``):
 what a path that knows the camera, as the floor path does, could reach at best; measured where the camera is known."""
-FOUND = marks.PATH_WORDS
+FOUND = next(p.words for p in paths.PATHS if p.found)
 """The floor path with its marks found in the video by their colour: measured on clips whose marks were drawn."""
 MEASURED: tuple[str, ...] = (KNOWN, *PATHS, FOUND)
 """Every way a clip's tracked pixels become heights: the known camera's, the user's paths, the floor path with its
 marks found."""
-FLOOR_PATH = next(p.words for p in paths.PATHS if p.key == "floor")
+FLOOR_PATH = next(p.words for p in paths.PATHS if p.floor and not p.found)
 """The path through floor marks (it needs the clip's camera to place the marks)."""
 CLICK_PX = 1.0
 """A careful click's error on a mark, pixels (standard deviation, each coordinate)."""

@@ -6,16 +6,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from collections.abc import Mapping
-from typing import Literal, get_args
+from typing import Literal
 
 from study.learn.metrics import Interval
 from study.report.reported import Leaf, Number, Reported, named
-from study.see.marks import PATH_KEY as FOUND
 from study.see.paths import PathKey  # the paths are defined once, there
 from study.simulate.observe import CAMERA_FAMILIES
 
-SweepKey = Literal[(*get_args(PathKey), FOUND)]  # type: ignore[valid-type]
-"""How the sweep's heights were had: a :data:`PathKey`, or the floor path with its marks found by colour."""
+SweepKey = PathKey
+"""How the sweep's heights were had (``study.see.paths.PathKey``)."""
 
 Family = Literal[("all", *(f.key for f in CAMERA_FAMILIES))]  # type: ignore[valid-type]
 """The camera sweep's clips pooled, or one camera family (``study.simulate.observe.CAMERA_FAMILIES``)."""

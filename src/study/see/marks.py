@@ -34,11 +34,6 @@ AMBIGUOUS = 3.0
 ambiguous."""
 FRAMES = 9
 """Frames whose per-pixel median :func:`find_in_video` reads."""
-PATH_KEY = "found"
-"""The results' key of the floor path with its marks found by colour (``study classify --floor MARKS.csv``), beside
-``study.see.paths``' keys (the floor path's own, ``floor``, is the marks clicked)."""
-PATH_WORDS = "floor marks found"
-"""What the book calls :data:`PATH_KEY`."""
 
 
 def find(bgr: np.ndarray, hsv: tuple[tuple[int, int, int], tuple[int, int, int]] = MARK_HSV) -> np.ndarray:

@@ -3,8 +3,9 @@ command line), its words in the book, and how it reads the scale. No numerics im
 ``--help`` reads these.
 
 Every other list of paths is derived from :data:`PATHS`: ``study.see.scale.SCALE_FROM`` and ``study track
---scale-from`` (the one-scale paths), ``study.methods.camera_cost.PATHS`` (what the camera sweep measures) and the
-results' names (``study.report.realworld.PathKey``, with ``exact``: the renderer's truth).
+--scale-from`` (the one-scale paths), ``study.methods.camera_cost.PATHS`` (what the camera sweep measures on every
+clip; the marks found by colour only where they were drawn) and the results' names (:data:`PathKey`, with
+``exact``: the renderer's truth, and ``known``).
 """
 
 from __future__ import annotations
@@ -25,6 +26,12 @@ class CameraPath:
     """True: one metres-per-pixel scale for the whole clip (``study.see.scale.read_scale(how=key)``); False: the
     camera's geometry fitted frame by frame (``study.see.geometry``), or given by marks on the floor
     (``study.see.floor``, ``--floor``)."""
+    floor: bool = False
+    """True: the camera from marks on the floor (``--floor FLOOR.csv``)."""
+    found: bool = False
+    """True: the marks' pixels found in the video by their colour (``study.see.marks``: a ``FLOOR.csv`` of positions
+    only), so measured only on clips whose marks were drawn; False for a path that needs no marks or is given their
+    pixels."""
 
 
 PATHS: tuple[CameraPath, ...] = (
@@ -32,7 +39,8 @@ PATHS: tuple[CameraPath, ...] = (
     CameraPath("mean", "mean silhouette", one_scale=True),
     CameraPath("gravity", "gravity", one_scale=True),
     CameraPath("geometry", "geometry", one_scale=False),
-    CameraPath("floor", "floor marks", one_scale=False),
+    CameraPath("floor", "floor marks", one_scale=False, floor=True),
+    CameraPath("found", "floor marks found", one_scale=False, floor=True, found=True),
 )
 """Every path, in the order the tables show them."""
 
@@ -45,6 +53,10 @@ KNOWN_WORDS = "known camera"
 """What the book calls :data:`KNOWN`."""
 
 SCALE_FROM: tuple[str, ...] = tuple(p.key for p in PATHS if p.one_scale)
+FLOOR_KEYS: tuple[str, ...] = tuple(p.key for p in PATHS if p.floor)
+"""The paths through a camera the floor marks give (``--floor``), the marks clicked or found."""
+FOUND: str = next(p.key for p in PATHS if p.found)
+"""The floor path with its marks found by colour (``study classify --floor MARKS.csv``, positions only)."""
 """How one scale can be read (``study track --scale-from``)."""
 
 DEFAULT = "mean"
