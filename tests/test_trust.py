@@ -70,6 +70,9 @@ def test_the_shipped_copy_reads_back_and_a_broken_one_is_named(tmp_path, monkeyp
     warned = trust.exact_warning("velocity-exact", "model m", trust.measurements(None))
     assert warned is not None and "exact trajectories" in warned and "64.2 % [52.9, 75.0]" in warned
     assert "--observe any-camera" in warned and trust.exact_warning("velocity-any-camera", "model m", trust.measurements(None)) is None
+    itself = trust.exact_warning("velocity-exact", "the recommended model", trust.measurements(None), "floor", True)
+    assert "use the recommended model" not in itself and "--observe any-camera" in itself, "not itself as the cure"
+    assert "64.2" not in itself, "the floor path's own number, and the sweep measured none for it here"
     path.write_text('{"format": "study.measured/1"}')
     with pytest.raises(ModelError, match=f"{path} cannot be read"):
         measured.read_shipped(path)

@@ -242,7 +242,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
     warnings = (f"{which}: {len(failed)} of {len(members)} seed(s) failed to train (on their validation throws they "
                 "could not be told from a coin), so their answers are near chance: retrain ('study train' with "
                 "another --seed) or pass another --model",) if failed else ()
-    exact = exact_warning(got.kind, which, got.seen)
+    exact = exact_warning(got.kind, which, got.seen, route, got.candidate is not None)
     return Answer(str(source), trust.label(p_heavy), max(p_heavy, 1.0 - p_heavy), p_heavy, which, assumed, traj,
                   warnings + ((exact,) if exact else ()), trust)
 

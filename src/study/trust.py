@@ -101,14 +101,17 @@ def for_answer(kind: str, path: str, seen: Measurements, band: tuple[float, floa
     return Trust(got, f"{source}: models of this kind ({kind}) through the {words} path{said}", band)
 
 
-def exact_warning(kind: str, which: str, seen: Measurements) -> str | None:
+def exact_warning(kind: str, which: str, seen: Measurements, path: str = paths.DEFAULT,
+                  recommended: bool = False) -> str | None:
     """For a model trained on exact trajectories given a video: a warning saying what the sweep measured for such
-    models through the default path (``seen``: :func:`measurements`), and what to use instead; None for any other
-    kind."""
+    models through the answer's ``path`` (:func:`path_of`; ``seen``: :func:`measurements`), and what to use instead
+    (a build can recommend one: ``recommended``); None for any other kind."""
     if not kind.endswith("-exact"):
         return None
-    got = seen.measured.get(kind, {}).get(paths.DEFAULT)
+    got = seen.measured.get(kind, {}).get(path)
+    words = next((p.words for p in paths.PATHS if p.key == path), path)
     said = ("" if got is None else
-            f"; on {seen.source}, such models labelled {pct_ci(got)} of the throws right through one scale")
-    return (f"{which} was trained on exact trajectories, not on heights a camera gives{said}. For video, use the "
-            "recommended model (no --model) or train with --observe any-camera")
+            f"; on {seen.source}, such models labelled {pct_ci(got)} of the throws right through the {words} path")
+    instead = ("train one with --observe any-camera" if recommended else
+               "use the recommended model (no --model) or train with --observe any-camera")
+    return f"{which} was trained on exact trajectories, not on heights a camera gives{said}. For video, {instead}"
