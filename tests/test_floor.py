@@ -173,39 +173,56 @@ def test_frames_split_at_a_misjudged_bounce_are_placed_by_the_fitted_contact_not
     assert np.sqrt(np.mean(err**2)) < 0.012
 
 
-def test_the_apparent_size_holds_a_first_flight_a_low_camera_and_a_tracker_jump_leave_open():
-    """A camera 0.4 m over the floor, a 4-pixel tracker jump for three frames of the first fall, the blob's size
-    giving each frame's depth 10 % too far with 5 % noise: the first flight's heights come half as far off with the
-    apparent size as without it (14 and 25 mm); the clip's 10 % is the fit's to find, not an error."""
+def test_the_apparent_size_holds_a_first_flight_that_a_low_camera_and_a_tracker_jump_leave_open():
+    """A camera 0.4 m over the floor, a 4-pixel tracker jump for three frames of the first fall, over 8 draws of the
+    pixels' noise: with each frame's depth from its apparent size the first flight (no contact before it) comes
+    closer on average (exact sizes: 18 -> 16 mm); a size 10 % off with 5 % noise a frame, the clip's bias the fit
+    finds, costs under 2.5 mm on average (with the bias's prior as tight as 0.1, 6 mm: the prior pulled the bias to
+    none, and the first flight with it)."""
     t, path = tumbling_throw(fps=30.0)
     cam = scene(0.4, 3.0, 20.0, path)
     cal = floor.calibrate(marks(cam, path, 1.0), cam.width, cam.height)
-    uv = cam.project(path) + np.random.default_rng(2).normal(0.0, 0.5, (len(t), 2))
-    uv[6:9, 1] += 4.0
-    sized = 1.1 * cam.depth_of(path) * np.exp(np.random.default_rng(3).normal(0.0, 0.05, len(t)))
-    first = slice(0, 12)  # the throw's first flight, no contact before it
+    depth = cam.depth_of(path)
+    first = slice(0, 12)  # the throw's first flight
 
     def off(z: np.ndarray) -> float:
         return float(np.sqrt(np.nanmean((z - path[:, 2])[first] ** 2)))
 
-    without = off(floor.heights(cal.camera, t, uv[:, 0], uv[:, 1], REST))
-    with_size = off(floor.centres(cal.camera, t, uv[:, 0], uv[:, 1], REST, sized)[0][:, 2])
-    assert with_size < 0.7 * without
+    without, exact, biased = [], [], []
+    for seed in range(8):
+        rng = np.random.default_rng(100 + seed)
+        uv = cam.project(path) + rng.normal(0.0, 0.5, (len(t), 2))
+        uv[6:9, 1] += 4.0
+        sized = 1.1 * depth * np.exp(rng.normal(0.0, 0.05, len(t)))
+        without.append(off(floor.heights(cal.camera, t, uv[:, 0], uv[:, 1], REST)))
+        exact.append(off(floor.centres(cal.camera, t, uv[:, 0], uv[:, 1], REST, depth)[0][:, 2]))
+        biased.append(off(floor.centres(cal.camera, t, uv[:, 0], uv[:, 1], REST, sized)[0][:, 2]))
+    assert np.mean(exact) < 0.9 * np.mean(without)
+    assert np.mean(biased) < np.mean(without) + 0.0025, f"{np.mean(biased)} {np.mean(without)} {np.mean(exact)}"
 
 
-def test_on_floor_reads_the_blobs_diameter_given_the_objects_size_and_refuses_a_size_of_nothing():
+def _track(cam, t: np.ndarray, uv: np.ndarray, diameter: np.ndarray) -> Trajectory:
+    n = len(t)
+    return Trajectory(t=t, u=uv[:, 0], v=uv[:, 1], status=np.ones(n, np.int8), segment=np.zeros(n, np.int32),
+                      confidence=np.ones(n), diameter=diameter, fps=30.0, source="throw.mp4", width=cam.width,
+                      height_px=cam.height)
+
+
+def test_on_floor_reads_the_blobs_diameter_given_the_objects_size_and_ignores_diameters_it_cannot_use():
     t, path = tumbling_throw(fps=30.0)
     cam = scene(0.4, 3.0, 20.0, path)
     uv = cam.project(path)
-    uv[6:9, 1] += 4.0
-    size = 0.2
-    n = len(t)
-    traj = Trajectory(t=t, u=uv[:, 0], v=uv[:, 1], status=np.ones(n, np.int8), segment=np.zeros(n, np.int32),
-                      confidence=np.ones(n), diameter=cam.focal * size / cam.depth_of(path), fps=30.0,
-                      source="throw.mp4", width=cam.width, height_px=cam.height)
-    f = marks(cam, path, 0.0)
-    plain, _ = floor.on_floor(traj, f, REST)
-    sized, _ = floor.on_floor(traj, f, REST, size)
-    assert not np.allclose(plain.z, sized.z, equal_nan=True), "the size moves the first flight"
+    uv[6:9, 1] += 4.0  # a tracker's jump mid-fall
+    size, f = 0.2, marks(cam, path, 0.0)
+    plain, _ = floor.on_floor(_track(cam, t, uv, cam.focal * size / cam.depth_of(path)), f, REST)
+    sized, _ = floor.on_floor(_track(cam, t, uv, cam.focal * size / cam.depth_of(path)), f, REST, size)
+
+    def off(z: np.ndarray) -> float:
+        return float(np.sqrt(np.nanmean((z - path[:, 2]) ** 2)))
+
+    assert off(sized.z) < off(plain.z), "the blob's size brings the heights closer"
+    for unusable in (np.nan, 0.0, np.inf):  # not measured, or nothing a depth can come from
+        got, _ = floor.on_floor(_track(cam, t, uv, np.full(len(t), unusable)), f, REST, size)
+        np.testing.assert_array_equal(got.z, plain.z)
     with pytest.raises(ConfigError, match="size"):
-        floor.on_floor(traj, f, REST, 0.0)
+        floor.on_floor(_track(cam, t, uv, np.full(len(t), 30.0)), f, REST, 0.0)

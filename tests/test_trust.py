@@ -73,6 +73,13 @@ def test_the_shipped_copy_reads_back_and_a_broken_one_is_named(tmp_path, monkeyp
     itself = trust.exact_warning("velocity-exact", "the recommended model", trust.measurements(None), "floor", True)
     assert "use the recommended model" not in itself and "--observe any-camera" in itself, "not itself as the cure"
     assert "64.2" not in itself, "the floor path's own number, and the sweep measured none for it here"
+    floor_iv = Interval(0.7, 0.6, 0.8, "test")
+    monkeypatch.setattr(measured, "SHIPPED", measured.write_shipped(
+        tmp_path / "floor.json", measured.Shipped("abc1234", "paper", 80, {"velocity-exact": {"mean": IV, "floor": floor_iv}})))
+    on_floor = trust.exact_warning("velocity-exact", "model m", trust.measurements(None), "floor")
+    assert "70.0 % [60.0, 80.0]" in on_floor and "through the floor marks path" in on_floor, on_floor
+    scaled = trust.exact_warning("velocity-exact", "model m", trust.measurements(None), trust.MEASURED_SCALE)
+    assert "64.2 % [52.9, 75.0]" in scaled, "a scale the user measured: the one-scale path's number"
     path.write_text('{"format": "study.measured/1"}')
     with pytest.raises(ModelError, match=f"{path} cannot be read"):
         measured.read_shipped(path)

@@ -22,8 +22,9 @@ from study.see import paths
 
 CANNOT_TELL = "cannot tell"
 """The answer where p(heavy) falls inside the model's cannot-tell band: neither right nor wrong in a tally."""
-FLOOR = "floor"
-"""The path of heights placed through the camera that floor marks give (``--floor``, experimental)."""
+FLOOR = next(p.key for p in paths.PATHS if p.floor and not p.found)
+"""The path of heights placed through the camera that floor marks give (``--floor``, experimental), the marks' pixels
+given."""
 MEASURED_SCALE = "measured scale"
 """The path of a scale the user measured (``--metres-per-pixel``): the sweep has no such path."""
 
@@ -108,8 +109,10 @@ def exact_warning(kind: str, which: str, seen: Measurements, path: str = paths.D
     (a build can recommend one: ``recommended``); None for any other kind."""
     if not kind.endswith("-exact"):
         return None
+    if path not in {p.key for p in paths.PATHS}:  # a scale the user measured: the sweep read one off the object
+        path = paths.DEFAULT
     got = seen.measured.get(kind, {}).get(path)
-    words = next((p.words for p in paths.PATHS if p.key == path), path)
+    words = next(p.words for p in paths.PATHS if p.key == path)
     said = ("" if got is None else
             f"; on {seen.source}, such models labelled {pct_ci(got)} of the throws right through the {words} path")
     instead = ("train one with --observe any-camera" if recommended else

@@ -19,7 +19,7 @@ class CameraPath:
     """One way from a clip's pixels to metres without a measured camera."""
 
     key: str
-    """Its name in the results (``realworld.sweep.all.<key>``) and, for a one-scale path, ``--scale-from KEY``."""
+    """Its name in the results (``usercamera.sweep.all.<key>``) and, for a one-scale path, ``--scale-from KEY``."""
     words: str
     """What the book calls it."""
     one_scale: bool
@@ -53,11 +53,11 @@ KNOWN_WORDS = "known camera"
 """What the book calls :data:`KNOWN`."""
 
 SCALE_FROM: tuple[str, ...] = tuple(p.key for p in PATHS if p.one_scale)
+"""How one scale can be read (``study track --scale-from``)."""
 FLOOR_KEYS: tuple[str, ...] = tuple(p.key for p in PATHS if p.floor)
 """The paths through a camera the floor marks give (``--floor``), the marks clicked or found."""
 FOUND: str = next(p.key for p in PATHS if p.found)
 """The floor path with its marks found by colour (``study classify --floor MARKS.csv``, positions only)."""
-"""How one scale can be read (``study track --scale-from``)."""
 
 DEFAULT = "mean"
 """The way a user's path reads the scale unless told otherwise (``study classify``, ``study track``, the real-world

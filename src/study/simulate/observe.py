@@ -497,7 +497,7 @@ class CameraFamily:
     """One family of the cameras a user might film with: a range per quantity, each drawn uniformly."""
 
     key: str
-    """Its name in the results (``realworld.sweep.<key>``)."""
+    """Its name in the results (``usercamera.sweep.<key>``)."""
     height: tuple[float, float]
     """Camera height above the floor, metres."""
     tilt: tuple[float, float]
