@@ -300,8 +300,9 @@ def _add_object_options(p: argparse.ArgumentParser, tennis_default: bool) -> Non
                    help="four or more marks on the floor (five or more recommended): a CSV with the header u,v,x,y, "
                    "one row per mark, its pixel in the video (u right, v down, the top-left pixel's centre at 0,0) "
                    "and its position on the floor in metres; or, for marks of magenta paper, the header x,y and "
-                   "their positions only (five or more, laid out with no symmetry): they are found in the video. The camera they give places each frame's centre (its "
-                   "contacts on the floor, its flights between them) instead of one scale for the whole video; with "
+                   "their positions only (five or more, laid out with no symmetry): they are found in the video. "
+                   "The camera they give places each frame's centre (its contacts on the floor, its flights between "
+                   "them, the blob's size against --object-size) instead of one scale for the whole video; with "
                    "--manifest, for every clip of the folder (a camera that stood still). Experimental: on rendered "
                    "video its heights are not yet as close as on clean pixels (scripts/floor_sweep.py measures them)")
 
