@@ -374,6 +374,7 @@ def test_track_and_classify_through_a_floor_the_user_marked(rendered, tmp_path, 
                    "0.2", "--object-shape", "box", "--floor", str(marks), "--no-progress"])
     lines = capsys.readouterr().out.strip().splitlines()
     assert rc == 0 and "camera from 6 floor marks" in lines[-1] and "the flights between them" in lines[-1], lines
+    assert "the blob's size against a 0." in lines[-1], "the answer says it weighed the size"
     rc = cli.main(["track", str(rendered.video), "--color", "orange", "--floor", str(marks), "--no-progress"])
     assert rc == 2 and "--floor: give the object's size" in capsys.readouterr().err
     marks.write_text("u,v,x,y\n1,2,3,4\n")

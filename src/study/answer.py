@@ -222,9 +222,11 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
               track.track_video(path, track_config or TrackConfig()))  # pixels: scaled once, below
     rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0
     if floor is not None:  # the camera the floor marks give: each frame's own depth
-        traj, cal = on_floor(pixels, floor, rest, object_shape.mean_size() if object_shape else None)
-        how = (f"{cal.note()}; each frame's centre from the contacts and the flights between them, the centre "
-               f"{rest:.3f} m up at rest")
+        size = object_shape.mean_size() if object_shape else None
+        traj, cal = on_floor(pixels, floor, rest, size)
+        weighed = f", the blob's size against a {size:.3f} m mean silhouette" if size else ""
+        how = (f"{cal.note()}; each frame's centre from the contacts and the flights between them{weighed}, the "
+               f"centre {rest:.3f} m up at rest")
     else:
         traj, scale = in_metres(pixels, object_shape, scale_from, metres_per_pixel)
         how = (f"{scale}; the ground at the lowest centre (row {traj.ground_v:.0f}), one scale for the whole video "
