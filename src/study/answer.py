@@ -24,8 +24,8 @@ from study.runs import measured, recommended
 from study.see import track
 from study.see.config import TrackConfig
 from study.see.floor import Floor, on_floor
-from study.see.paths import FLOOR_KEYS
 from study.see.marks import located, needs_finding, read as read_floor
+from study.see.paths import FLOOR_KEYS
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 from study.trust import CANNOT_TELL, Measurements, Trust, exact_warning, for_answer, measurements, path_of

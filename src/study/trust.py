@@ -55,6 +55,12 @@ class Trust:
         return f"{acc} ({self.source}){band}"
 
 
+def _words(path: str) -> str | None:
+    """What the book calls the path ``path`` (a key of ``study.see.paths.PATHS``); None for a path the sweep does not
+    have (:data:`MEASURED_SCALE`)."""
+    return next((p.words for p in paths.PATHS if p.key == path), None)
+
+
 def path_of(floor: bool, scale_from: str, metres_per_pixel: float | None, found: bool = False) -> str:
     """The path an answer's heights came by: :data:`FLOOR` (``study.see.paths.FOUND`` where the marks were
     ``found`` in the video by their colour), :data:`MEASURED_SCALE` or a one-scale path's key."""
@@ -91,7 +97,7 @@ def for_answer(kind: str, path: str, seen: Measurements, band: tuple[float, floa
     measured, source = seen.measured, seen.source
     if path == MEASURED_SCALE:
         return Trust(None, "a scale you measured: the camera sweep measured one scale read off the object", band)
-    words = next((p.words for p in paths.PATHS if p.key == path), path)
+    words = _words(path) or path
     if not measured:
         return Trust(None, f"no build's camera sweep is at hand for the {words} path: build the book to measure it",
                      band)
@@ -109,10 +115,10 @@ def exact_warning(kind: str, which: str, seen: Measurements, path: str = paths.D
     (a build can recommend one: ``recommended``); None for any other kind."""
     if not kind.endswith("-exact"):
         return None
-    if path not in {p.key for p in paths.PATHS}:  # a scale the user measured: the sweep read one off the object
+    if _words(path) is None:  # a scale the user measured: the sweep read one off the object
         path = paths.DEFAULT
     got = seen.measured.get(kind, {}).get(path)
-    words = next(p.words for p in paths.PATHS if p.key == path)
+    words = _words(path)
     said = ("" if got is None else
             f"; on {seen.source}, such models labelled {pct_ci(got)} of the throws right through the {words} path")
     instead = ("train one with --observe any-camera" if recommended else

@@ -398,9 +398,8 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
            sized: np.ndarray | None = None) -> list[np.ndarray]:
     """Each flight's centres (len(frames), 3), every flight and contact fitted at once through the camera: the
     unknowns are each contact's 3-D point and time, the velocity of each flight with no contact before it and the
-    apparent size's bias for the clip; a
-    flight between two contacts is the ballistic arc through both (its horizontal motion uniform, its height a
-    parabola in g), one without the arc that ends at its contact. Least squares on the flights' pixels (robust
+    apparent size's bias for the clip; a flight between two contacts is the ballistic arc through both (its
+    horizontal motion uniform, its height a parabola in g), one without the arc that ends at its contact. Least squares on the flights' pixels (robust
     beyond :data:`TRACK_PX`), each contact's pixel (:data:`CONTACT_PX`), its time (:data:`CONTACT_S`) and its
     centre's height (``rest_height``, spread :data:`CONTACT_LIFT` of it above, :data:`CONTACT_SINK` below), and,
     given ``sized`` (n,) each frame's depth from its apparent size, metres (NaN where unknown), each flight frame's
@@ -415,6 +414,9 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
     K = len(contacts)
     free = [i for i, (a, _, _) in enumerate(flights) if a is None]  # flights with a velocity of their own
     ok = [np.isfinite(u[f]) & np.isfinite(v[f]) for _, _, f in flights]
+    seen_px = [np.column_stack([u[f][o], v[f][o]]) for (_, _, f), o in zip(flights, ok)]  # each (k, 2) pixels
+    with np.errstate(invalid="ignore", divide="ignore"):
+        log_sized = [np.log(sized[f][o]) for (_, _, f), o in zip(flights, ok)]  # each (k,), NaN where unknown
     down = np.array([0.0, 0.0, -0.5 * G])
 
     def arc(i: int, p: np.ndarray, vel: np.ndarray, tc: np.ndarray, times: np.ndarray) -> np.ndarray:
@@ -436,17 +438,20 @@ def _joint(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, flights:
 
     def residual(x: np.ndarray) -> np.ndarray:
         p, vel, tc, bias = unpack(x)
-        parts = [(camera.project(arc(i, p, vel, tc, t[f][o])) - np.column_stack([u[f][o], v[f][o]])).ravel()
-                 for i, ((_, _, f), o) in enumerate(zip(flights, ok)) if o.any()]
+        parts = []
+        for i, ((_, _, f), o) in enumerate(zip(flights, ok)):
+            if not o.any():
+                continue
+            xyz = arc(i, p, vel, tc, t[f][o])  # (k, 3) the flight's seen frames, once for pixels and size
+            parts.append((camera.project(xyz) - seen_px[i]).ravel())
+            s = np.isfinite(log_sized[i])
+            if s.any():
+                depth = np.maximum(camera.depth_of(xyz[s]), 1e-3)
+                parts.append((np.log(depth) - log_sized[i][s] - bias) / SIZE_SD * TRACK_PX)
         parts.append(((camera.project(p) - seen_c) / CONTACT_PX * TRACK_PX).ravel())
         lift = p[:, 2] - rest_height
         parts.append(lift / (np.where(lift < 0, CONTACT_SINK, CONTACT_LIFT) * rest_height) * TRACK_PX)
         parts.append((tc - seen_t) / CONTACT_S * TRACK_PX)
-        for i, ((_, _, f), o) in enumerate(zip(flights, ok)):
-            s = o & np.isfinite(sized[f])
-            if s.any():
-                depth = np.maximum(camera.depth_of(arc(i, p, vel, tc, t[f][s])), 1e-3)
-                parts.append((np.log(depth / sized[f][s]) - bias) / SIZE_SD * TRACK_PX)
         parts.append(np.array([bias / SIZE_BIAS * TRACK_PX]))
         return np.concatenate(parts)
 
@@ -535,8 +540,8 @@ def on_floor(traj: Trajectory, floor: Floor, rest_height: float, size: float | N
     sized = None
     if size is not None:
         check_range("size (metres)", size, 0.0, 10.0, lo_open=True)
-        seen = np.isfinite(traj.diameter) & (traj.diameter > 0)
-        sized = cal.camera.focal * size / np.where(seen, traj.diameter, np.nan)
+        usable = np.isfinite(traj.diameter) & (traj.diameter > 0)
+        sized = cal.camera.focal * size / np.where(usable, traj.diameter, np.nan)
     xyz, _ = centres(cal.camera, traj.t, traj.u, traj.v, rest_height, sized)
     seen = np.isfinite(xyz).all(axis=1)
     if seen.sum() < 3:

@@ -120,8 +120,9 @@ def phases(t: np.ndarray, v: np.ndarray, scale: np.ndarray, most: float = 1.8, g
     0.25 g of none is rolling, sliding or resting: on the ground. ``most``: the upper bound, in g (infinite where
     ``scale`` only bounds the true scale from above). ``gap_s``: seconds of other frames between two runs of flight
     frames that make them one flight (a tracker's jump breaks the curvature for a frame or two); keep it under the
-    frames a bounce's kink spans, about 3 on rows as they are, more on smoothed rows. Returns the flights (index arrays, each a run of flight frames widened by a frame on each side, at least
-    :data:`MIN_ARC` long) and the ground mask (n,) bool."""
+    frames a bounce's kink spans, about 3 on rows as they are, more on smoothed rows. Returns the flights (index
+    arrays, each a run of flight frames widened by a frame on each side, at least :data:`MIN_ARC` long) and the
+    ground mask (n,) bool."""
     n = len(t)
     ratio = np.full(n, np.nan)
     for i in range(2, n - 2):
