@@ -78,6 +78,40 @@ def test_each_network_trains_on_the_condition_it_is_tested_on():
     assert sum(len(c) for _, c, _ in plan) == 3 * (2 * 3 + 6 * 4), "3 seeds: 3 nets per exact column, 4 observed"
 
 
+def test_each_column_chooses_a_network_rate_among_its_grid_by_mean_validation():
+    from types import SimpleNamespace
+
+    class Runs(list):
+        def val_accuracies(self):
+            return np.array([r.val_accuracy for r in self])
+
+    class Fake:  # the GRU picked 0.003 on exact positions; through a noisy camera 2 of its 3 seeds stay at chance
+        val = {3e-3: (0.52, 0.70, 0.51), 1e-3: (0.73, 0.69, 0.73)}
+        rejected: list = []
+
+        def train_runs(self, cfg, dims, seeds, desc=""):
+            return Runs(SimpleNamespace(val_accuracy=self.val[cfg.lr][s], val_loss=0.6) for s in seeds)
+
+        def reject(self, cfgs):
+            self.rejected += list(cfgs)
+
+    gru = TrainConfig(cell="gru", lr=3e-3, inputs="velocity")
+    cands = motion.candidates(gru, {"gru": (1e-3, 3e-3)})
+    assert [c.lr for c in cands] == [3e-3, 1e-3], "the grid's pick first"
+    runner = Fake()
+    assert motion.chosen(runner, cands, (0, 1, 2)).lr == 1e-3
+    assert sorted((c.lr, c.seed) for c in runner.rejected) == [(3e-3, 0), (3e-3, 1), (3e-3, 2)]
+    Fake.val = {3e-3: (0.7, 0.7, 0.7), 1e-3: (0.7, 0.7, 0.7)}
+    assert motion.chosen(Fake(), cands, (0, 1, 2)).lr == 3e-3, "a tie keeps the grid's pick"
+    base = {n: TrainConfig(cell="gru" if n == "gru_velocity" else "peephole") for n in motion.NETWORKS}
+    base["peephole_exact_trained"] = TrainConfig(cell="gru")  # never chosen again: Table 1's network as it is
+    plan = motion.plan({True: "on", False: "off"}, base, camera.columns(CAL), (0, 1, 2), {"gru": (1e-3, 3e-3)})
+    lrs = [c.lr for _, batch, _ in plan for c in batch if c.cell == "gru" and c.observe != "exact"]
+    assert sorted(set(lrs)) == [1e-3, 3e-3] and len(lrs) == 6 * 3 * 2, "every observed column, both rates"
+    exact_trained = [c for _, batch, _ in plan for c in batch if c.cell == "gru" and c.observe == "exact"]
+    assert {c.lr for c in exact_trained} == {1e-3, 3e-3} and len(exact_trained) == 2 * 3 * 2 + 6 * 3
+
+
 def test_the_learners_are_the_peephole_lstm_by_name_never_lstm():
     assert not any(n.startswith("lstm") for n in motion.LEARNERS)
     assert set(motion.NAMES) == set(motion.LEARNERS) and "peephole_exact_trained" not in motion.SHOWN
@@ -195,6 +229,8 @@ def test_each_entry_is_what_its_learner_got_right(m):
         assert e.correct.shape == ((2, n) if seeded else (1, n)), (learner, key)
         source = m.numbers.learners[learner][e.column.air_key][e.column.name].source
         assert source["seeds"] == ([0, 1] if seeded else []) and source["failed"] == e.failed
+        network = learner in motion.NETWORKS or learner == "peephole_exact_trained"
+        assert source.get("lr") == e.lr and (e.lr is not None) == network, "a network's rate is in its source"
     assert m.entries["minirocket", PERFECT].correct.all()
     assert m.entries["rule", "air_off.exact"].feature in camera.RULE_FEATURES
     assert all(m.entries[n, "air_on.exact"].val == pytest.approx(0.75) for n in motion.NETWORKS), "mean of 0.8, 0.7"

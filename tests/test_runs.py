@@ -350,6 +350,28 @@ def test_a_failed_run_is_listed_with_the_reason_the_book_means_it_to_fail_or_as_
     assert failures.reason(dc.asdict(TrainConfig(length=3.0)), 30.0) == failures.BY_CHANCE, "Table 1's own: chance"
 
 
+def test_a_failed_candidate_its_chapter_turned_down_is_listed_as_rejected_not_chance(tmp_path):
+    import dataclasses as dc
+
+    from study.learn.config import TrainConfig
+    from study.runs import cluster, failures, schedule
+    from study.simulate.data import Dataset, Split
+
+    ds = Dataset(train=Split(np.zeros((4, 3, 3)), np.zeros(4, int), {}), test=Split(np.zeros((4, 3, 3)), np.zeros(4, int), {}),
+                 fps=30.0)
+    plan = schedule.Plan(tmp_path / "motion.jsonl")
+    high, low = TrainConfig(cell="gru", lr=3e-3), TrainConfig(cell="gru", lr=1e-3)
+    for cfg in (high, low):
+        plan.add(ds, cfg, tmp_path, True)
+        record = Path(plan.models[schedule.run_key(ds, cfg, False, "cpu")])
+        record.parent.mkdir(parents=True, exist_ok=True)
+        record.write_text(json.dumps({"config": dc.asdict(cfg), "failed": True, "best_epoch": 0, "epochs_run": 100}))
+    plan.reject(ds, high)
+    assert cluster.plan_totals([plan.path])["models"] == 2, "a rejection adds no model"
+    failed = {f["lr"]: f["reason"] for f in cluster.plan_listed([plan.path])["failed_runs"]}
+    assert failed == {3e-3: failures.REJECTED, 1e-3: failures.BY_CHANCE}, "the chosen rate's failure stays chance's"
+
+
 def test_a_run_still_improving_when_its_epoch_budget_ran_out_is_listed_as_not_flattened(tmp_path):
     import dataclasses as dc
 

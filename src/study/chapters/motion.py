@@ -89,12 +89,37 @@ def network_configs(cfgs: Mapping[Trained, TrainConfig], column: Column) -> dict
     return out
 
 
+def candidates(cfg: TrainConfig, rates: Mapping[str, tuple[float, ...]]) -> list[TrainConfig]:
+    """A network row's configs in one column: ``cfg`` at its own rate first, then at every other rate of its cell's
+    grid (``rates[cfg.cell]``; none when the cell is not in ``rates``). The grid picked the rate on exact inputs; a
+    camera's noise can make it too high (the GRU picked on positions, fed velocity through the 4 cm camera, stays
+    on the initial plateau at 0.003), so each column chooses again among them (:func:`chosen`)."""
+    return [cfg] + [dataclasses.replace(cfg, lr=lr) for lr in rates.get(cfg.cell, ()) if lr != cfg.lr]
+
+
 def plan(runners: Mapping[bool, Runner], cfgs: Mapping[Trained, TrainConfig], cols: Sequence[Column],
-         seeds: tuple[int, ...]) -> list[tuple[Runner, list[TrainConfig], bool]]:
+         seeds: tuple[int, ...], rates: Mapping[str, tuple[float, ...]] | None = None,
+         ) -> list[tuple[Runner, list[TrainConfig], bool]]:
     """Every network run of the table, as ``Runner.prefetch`` takes them: ``runners`` maps air on (True) / off
-    to the runner on that data."""
-    return [(runners[c.air], [dataclasses.replace(cfg, seed=s) for cfg in network_configs(cfgs, c).values()
-                              for s in seeds], True) for c in cols]
+    to the runner on that data; ``rates``: each cell's grid rates (:func:`candidates`)."""
+    return [(runners[c.air], [dataclasses.replace(cand, seed=s) for name, cfg in network_configs(cfgs, c).items()
+                              for cand in candidates(cfg, _grid(name, rates)) for s in seeds], True) for c in cols]
+
+
+def _grid(name: Trained, rates: Mapping[str, tuple[float, ...]] | None) -> Mapping[str, tuple[float, ...]]:
+    """The rates row ``name`` chooses among: none for the row trained exact (Table 1's network as it is)."""
+    return rates or {} if name in NETWORKS else {}
+
+
+def chosen(runner: Runner, cands: Sequence[TrainConfig], seeds: tuple[int, ...], desc: str = "runs") -> TrainConfig:
+    """The candidate whose runs over ``seeds`` have the highest mean validation accuracy (ties: the lower mean
+    validation loss, then the first), Table 1's rule for its grid (``paper.best_config``)."""
+    def rank(i: int) -> tuple[float, float, int]:
+        runs = runner.train_runs(cands[i], (cands[i].dims,), seeds, desc=desc)
+        return -float(np.mean(runs.val_accuracies())), float(np.mean([r.val_loss for r in runs])), i
+    best = min(range(len(cands)), key=rank)
+    runner.reject(dataclasses.replace(c, seed=s) for i, c in enumerate(cands) if i != best for s in seeds)
+    return cands[best]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -117,6 +142,8 @@ class Entry:
     """The rule's feature, for the rule."""
     seeds: tuple[int, ...] = ()
     """The seeds of its runs (none for the physics baseline and the rule)."""
+    lr: float | None = None
+    """The learning rate its column chose, for the networks (:func:`chosen`)."""
 
     @cached_property
     def interval(self) -> Interval:
@@ -125,26 +152,29 @@ class Entry:
 
 
 def column_entries(runner: Runner, cfgs: Mapping[Trained, TrainConfig], column: Column, seeds: tuple[int, ...],
-                   contact_height: float) -> list[Entry]:
+                   contact_height: float, rates: Mapping[str, tuple[float, ...]] | None = None) -> list[Entry]:
     """Every learner of :data:`LEARNERS` trained and tested on ``column``, with ``runner`` on the column's data
-    (air on or off), in the table's order: the networks trained on the column's condition, MiniRocket once per
-    seed (the cached exact fit in an exact column), the physics baseline and the best rule of
-    :data:`RULE_FEATURES` on the height alone, each fitted on the column's training inputs and scored on its test
-    inputs (``study.methods.learners``)."""
+    (air on or off), in the table's order: the networks trained on the column's condition, each at the rate of its
+    grid the column's validation chose (:func:`chosen`; ``rates`` as :func:`plan`'s), MiniRocket once per seed (the
+    cached exact fit in an exact column), the physics baseline and the best rule of :data:`RULE_FEATURES` on the
+    height alone, each fitted on the column's training inputs and scored on its test inputs
+    (``study.methods.learners``)."""
     ds = runner.dataset
     T = cfgs["peephole_positions"].n_frames(ds.fps)
     x_train, x_test = column.inputs(ds, T)
     tests = {"test": (x_test, ds.test.y)}
+    nets = {name: chosen(runner, candidates(cfg, _grid(name, rates)), seeds, desc=f"{column.key} {name}")
+            for name, cfg in network_configs(cfgs, column).items()}
     fitted: list[tuple[learners.Learner, np.ndarray | None]] = [
-        (learners.Network(name, cfg, seeds, desc=f"{column.key} {name}"), None)
-        for name, cfg in network_configs(cfgs, column).items()]
+        (learners.Network(name, cfg, seeds, desc=f"{column.key} {name}"), None) for name, cfg in nets.items()]
     fitted += [(learners.Rocket("z", T, seeds), None if column.noise is None else x_train),
                (learners.Physics("z", T / ds.fps), x_train),
                (learners.Rule(RULE_FEATURES, contact_height), x_train)]
     out = []
     for learner, train_x in fitted:
         s = learner.score(runner, train_x, tests)
-        out.append(Entry(learner.name, column, s.correct["test"], s.failed, s.val, s.feature, s.seeds))  # type: ignore[arg-type]
+        lr = nets[learner.name].lr if learner.name in nets else None  # type: ignore[index]
+        out.append(Entry(learner.name, column, s.correct["test"], s.failed, s.val, s.feature, s.seeds, lr))  # type: ignore[arg-type]
     return sorted(out, key=lambda e: LEARNERS.index(e.learner))
 
 
@@ -197,7 +227,8 @@ def learner_numbers(entries: Mapping[tuple[Learner, str], Entry],
                 continue
             out.setdefault(name, {}).setdefault(c.air_key, {})[c.name] = number(
                 e.interval, f"{NAMES[name]}, Z, {'air on' if c.air else 'air off'}, {c.label}",
-                seeds=list(e.seeds) if e.correct.shape[0] > 1 else [], failed=e.failed)
+                seeds=list(e.seeds) if e.correct.shape[0] > 1 else [], failed=e.failed,
+                **({} if e.lr is None else {"lr": e.lr}))
     return out
 
 
@@ -310,8 +341,14 @@ class Motion:
 
     @property
     def gru_point(self) -> str:
+        """The GRU's truncation, and the rate each column chose (:func:`chosen`) where it is not the grid's pick."""
         c = self.configs["gru_velocity"]
-        return f"lr {c.lr:g}, truncation {c.truncation}"
+        moved = [col.heading for col in self.columns if self.entries["gru_velocity", col.key].lr not in (None, c.lr)]
+        other = {self.entries["gru_velocity", col.key].lr for col in self.columns} - {c.lr}
+        words = f"lr {c.lr:g}, truncation {c.truncation}"
+        if not moved:
+            return words
+        return f"{words}; lr {', '.join(f'{lr:g}' for lr in sorted(other))} where its column's validation chose it: {'; '.join(moved)}"
 
     def _velocity_gain(self, air: Air) -> str:
         vel, pos = (self.entries[n, f"{air}.exact"].interval.value for n in ("peephole_velocity", "peephole_positions"))
@@ -433,7 +470,9 @@ def compute(runner: Runner, cfgs: Mapping[Trained, TrainConfig] | None = None,
     cols = columns(calibrated)
     on = {True: runner, False: runner.air_off()}
     seeds = runner.preset.grid_seeds
-    runner.prefetch(plan(on, cfgs, cols, seeds), desc="every network")
+    rates = {cell: runner.preset.grid_lrs(cell) for cell in {cfg.cell for cfg in cfgs.values()}}
+    runner.prefetch(plan(on, cfgs, cols, seeds, rates), desc="every network")
     contact = runner.synth_config.shape.bounding_radius
-    entries = {(e.learner, c.key): e for c in cols for e in column_entries(on[c.air], cfgs, c, seeds, contact)}
+    entries = {(e.learner, c.key): e for c in cols
+               for e in column_entries(on[c.air], cfgs, c, seeds, contact, rates)}
     return report(runner.synth_config, cfgs, cols, entries, calibrated.drop, fitted_on)

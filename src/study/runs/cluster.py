@@ -54,6 +54,20 @@ def _planned(parts: Sequence[Path]) -> dict[str, tuple[str, Path]]:
     return models
 
 
+def _rejected(parts: Sequence[Path]) -> frozenset[str]:
+    """The models the plan files ``parts`` say a chapter trained as candidates and did not choose
+    (``schedule.Plan.reject``)."""
+    out: set[str] = set()
+    for part in parts:
+        if part.is_file():
+            for line in part.read_text().splitlines():
+                with contextlib.suppress(ValueError, KeyError, TypeError, AttributeError):
+                    entry = json.loads(line)
+                    if entry.get("rejected"):
+                        out.add(str(entry["model"]))
+    return frozenset(out)
+
+
 def _totals(records: Sequence[str]) -> dict[str, float]:
     seconds = epochs = failed = 0.0
     for record in records:
@@ -78,7 +92,7 @@ def plan_listed(parts: Sequence[Path]) -> dict[str, list[dict[str, Any]]]:
     their records (``study.runs.failures.listed``)."""
     from study.runs.failures import listed
 
-    return listed(_planned(parts))
+    return listed(_planned(parts), _rejected(parts))
 
 
 def plan_by_part(parts: Sequence[Path]) -> dict[str, dict[str, float]]:

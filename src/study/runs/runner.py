@@ -124,6 +124,11 @@ class Runner:
         schedule.run_many(jobs, self.data_dir, desc=desc, progress=self.progress, workers=self.workers or None,
                           scheduler=self.scheduler or None, device=self.device)
 
+    def reject(self, cfgs: Iterable[TrainConfig]) -> None:
+        """Say that the runs of ``cfgs`` were candidates the chapter did not choose (``Plan.reject``)."""
+        for c in cfgs:
+            self.plan.reject(self.dataset, c, self.device)
+
     def rows(self, cfgs: list[TrainConfig], test: bool = True, desc: str = "runs") -> Runs:
         """The runs of ``cfgs`` on this runner's dataset as a table (:class:`~study.runs.runtable.Runs`)."""
         y = self.dataset.test.y

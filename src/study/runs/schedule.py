@@ -277,6 +277,14 @@ class Plan:
             with contextlib.suppress(OSError), open(self.path, "a") as f:
                 f.write(json.dumps({"model": model, "record": record}) + "\n")
 
+    def reject(self, dataset: Dataset, cfg: TrainConfig, device: str = "cpu") -> None:
+        """Record that the run of ``cfg`` on ``dataset``, trained as a candidate, was not chosen (a rate its
+        chapter's validation turned down): the build's list of failed runs gives it that reason. A line with no
+        record, so the plan's totals count the run once, where it was added."""
+        if self.path is not None:
+            with contextlib.suppress(OSError), open(self.path, "a") as f:
+                f.write(json.dumps({"model": run_key(dataset, cfg, False, device), "rejected": True}) + "\n")
+
     @property
     def n_models(self) -> int:
         """Distinct models: what a build from an empty cache trains."""
