@@ -4,6 +4,7 @@ fresh cache (nothing trains)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -86,30 +87,52 @@ def test_each_column_chooses_a_network_rate_among_its_grid_by_mean_validation():
             return np.array([r.val_accuracy for r in self])
 
     class Fake:  # the GRU picked 0.003 on exact positions; through a noisy camera 2 of its 3 seeds stay at chance
-        val = {3e-3: (0.52, 0.70, 0.51), 1e-3: (0.73, 0.69, 0.73)}
-        rejected: list = []
+        def __init__(self, val, loss=None):
+            self.val, self.loss = val, loss or {lr: 0.6 for lr in val}
 
         def train_runs(self, cfg, dims, seeds, desc=""):
-            return Runs(SimpleNamespace(val_accuracy=self.val[cfg.lr][s], val_loss=0.6) for s in seeds)
-
-        def reject(self, cfgs):
-            self.rejected += list(cfgs)
+            return Runs(SimpleNamespace(val_accuracy=self.val[cfg.lr][s], val_loss=self.loss[cfg.lr]) for s in seeds)
 
     gru = TrainConfig(cell="gru", lr=3e-3, inputs="velocity")
     cands = motion.candidates(gru, {"gru": (1e-3, 3e-3)})
     assert [c.lr for c in cands] == [3e-3, 1e-3], "the grid's pick first"
-    runner = Fake()
-    assert motion.chosen(runner, cands, (0, 1, 2)).lr == 1e-3
-    assert sorted((c.lr, c.seed) for c in runner.rejected) == [(3e-3, 0), (3e-3, 1), (3e-3, 2)]
-    Fake.val = {3e-3: (0.7, 0.7, 0.7), 1e-3: (0.7, 0.7, 0.7)}
-    assert motion.chosen(Fake(), cands, (0, 1, 2)).lr == 3e-3, "a tie keeps the grid's pick"
-    base = {n: TrainConfig(cell="gru" if n == "gru_velocity" else "peephole") for n in motion.NETWORKS}
-    base["peephole_exact_trained"] = TrainConfig(cell="gru")  # never chosen again: Table 1's network as it is
-    plan = motion.plan({True: "on", False: "off"}, base, camera.columns(CAL), (0, 1, 2), {"gru": (1e-3, 3e-3)})
-    lrs = [c.lr for _, batch, _ in plan for c in batch if c.cell == "gru" and c.observe != "exact"]
-    assert sorted(set(lrs)) == [1e-3, 3e-3] and len(lrs) == 6 * 3 * 2, "every observed column, both rates"
-    exact_trained = [c for _, batch, _ in plan for c in batch if c.cell == "gru" and c.observe == "exact"]
-    assert {c.lr for c in exact_trained} == {1e-3, 3e-3} and len(exact_trained) == 2 * 3 * 2 + 6 * 3
+    assert motion.chosen(Fake({3e-3: (0.52, 0.74, 0.51), 1e-3: (0.73, 0.69, 0.73)}), cands, (0, 1, 2)).lr == 1e-3
+    assert motion.chosen(Fake({3e-3: (0.99, 0.55, 0.55), 1e-3: (0.70, 0.71, 0.72)}), cands, (0, 1, 2)).lr == 1e-3, \
+        "the mean, not the best seed"
+    even = {3e-3: (0.7, 0.7, 0.7), 1e-3: (0.7, 0.7, 0.7)}
+    assert motion.chosen(Fake(even), cands, (0, 1, 2)).lr == 3e-3, "a tie keeps the grid's pick"
+    assert motion.chosen(Fake(even, {3e-3: 0.6, 1e-3: 0.5}), cands, (0, 1, 2)).lr == 1e-3, "then the lower loss"
+
+
+def test_the_runs_a_column_turned_down_are_marked_unless_another_row_uses_them():
+    base = {"peephole_positions": TrainConfig(), "peephole_velocity": TrainConfig(inputs="velocity"),
+            "gru_velocity": TrainConfig(cell="gru", inputs="velocity"),
+            "peephole_exact_trained": TrainConfig()}  # never chosen again: Table 1's network as it is
+    cols = camera.columns(CAL)
+    rates = {"gru": (1e-3, 3e-3), "peephole": (1e-3, 3e-3)}
+    plan = motion.plan({True: "on", False: "off"}, base, cols, (0, 1, 2), rates)
+    gru = [c for _, batch, _ in plan for c in batch if c.cell == "gru"]
+    assert {c.lr for c in gru} == {1e-3, 3e-3} and len(gru) == 8 * 3 * 2, "every column, both rates"
+    trained_exact = [c for _, batch, _ in plan for c in batch if c.cell == "peephole" and c.observe == "exact"]
+    assert len(trained_exact) == 2 * 2 * 3 * 2 + 6 * 3, "the exact-trained row at its own rate only"
+    picked = {(n, c.key): base[n].lr for c in cols for n in motion.network_configs(base, c)}
+    picked["gru_velocity", "air_on.far"] = 3e-3  # this column turned the grid's pick (0.001) down
+    picked["peephole_positions", "air_off.exact"] = 3e-3  # ... and here, but the row trained exact uses 0.001
+    down = motion.turned_down(base, cols, (0, 1, 2), rates, picked)
+    far = [c for c in down[True] if c.cell == "gru" and c.lr == 1e-3]
+    assert len(far) == 3 and {c.observe_noise for c in far} == {cols[3].noise}, "the far column's three seeds"
+    assert not [c for c in down[False] if c.observe == "exact" and c.lr == 1e-3 and c.cell == "peephole"], \
+        "a run the row trained exact uses is not turned down"
+    assert len(down[True]) == 3 * 4 * 3, "3 rows, 4 columns, 3 seeds: one rate turned down each"
+    assert len(down[False]) == 3 * 4 * 3 - 3, "less the air-off exact column's 0.001, which the row trained exact uses"
+
+
+def test_the_page_says_which_column_chose_which_rate(m):
+    assert m.rates_moved == "no column chose another rate than its grid's"
+    key = m.columns[3].key
+    entries = {**m.entries, ("gru_velocity", key): dataclasses.replace(m.entries["gru_velocity", key], lr=1e-4)}
+    moved = dataclasses.replace(m, entries=entries).rates_moved
+    assert moved == f"the {motion.NAMES['gru_velocity']}: lr 0.0001 in {m.columns[3].heading}"
 
 
 def test_the_learners_are_the_peephole_lstm_by_name_never_lstm():

@@ -361,15 +361,18 @@ def test_a_failed_candidate_its_chapter_turned_down_is_listed_as_rejected_not_ch
                  fps=30.0)
     plan = schedule.Plan(tmp_path / "motion.jsonl")
     high, low = TrainConfig(cell="gru", lr=3e-3), TrainConfig(cell="gru", lr=1e-3)
-    for cfg in (high, low):
+    short = TrainConfig(cell="gru", lr=3e-3, length=0.5)
+    for cfg in (high, low, short):
         plan.add(ds, cfg, tmp_path, True)
         record = Path(plan.models[schedule.run_key(ds, cfg, False, "cpu")])
         record.parent.mkdir(parents=True, exist_ok=True)
         record.write_text(json.dumps({"config": dc.asdict(cfg), "failed": True, "best_epoch": 0, "epochs_run": 100}))
     plan.reject(ds, high)
-    assert cluster.plan_totals([plan.path])["models"] == 2, "a rejection adds no model"
-    failed = {f["lr"]: f["reason"] for f in cluster.plan_listed([plan.path])["failed_runs"]}
-    assert failed == {3e-3: failures.REJECTED, 1e-3: failures.BY_CHANCE}, "the chosen rate's failure stays chance's"
+    plan.reject(ds, short)
+    assert cluster.plan_totals([plan.path])["models"] == 3, "a rejection adds no model"
+    failed = {(f["lr"], f["length"]): f["reason"] for f in cluster.plan_listed([plan.path])["failed_runs"]}
+    assert failed[3e-3, 3.0] == failures.REJECTED and failed[1e-3, 3.0] == failures.BY_CHANCE, "the chosen stays chance's"
+    assert "shortest input" in failed[3e-3, 0.5], "a designed failure keeps its reason"
 
 
 def test_a_run_still_improving_when_its_epoch_budget_ran_out_is_listed_as_not_flattened(tmp_path):

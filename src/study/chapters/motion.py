@@ -89,7 +89,11 @@ def network_configs(cfgs: Mapping[Trained, TrainConfig], column: Column) -> dict
     return out
 
 
-def candidates(cfg: TrainConfig, rates: Mapping[str, tuple[float, ...]]) -> list[TrainConfig]:
+Rates = Mapping[str, tuple[float, ...]]
+"""Cell name (``TrainConfig.cell``) -> the Adam learning rates of its grid (``Preset.grid_lrs``)."""
+
+
+def candidates(cfg: TrainConfig, rates: Rates) -> list[TrainConfig]:
     """A network row's configs in one column: ``cfg`` at its own rate first, then at every other rate of its cell's
     grid (``rates[cfg.cell]``; none when the cell is not in ``rates``). The grid picked the rate on exact inputs; a
     camera's noise can make it too high (the GRU picked on positions, fed velocity through the 4 cm camera, stays
@@ -98,17 +102,18 @@ def candidates(cfg: TrainConfig, rates: Mapping[str, tuple[float, ...]]) -> list
 
 
 def plan(runners: Mapping[bool, Runner], cfgs: Mapping[Trained, TrainConfig], cols: Sequence[Column],
-         seeds: tuple[int, ...], rates: Mapping[str, tuple[float, ...]] | None = None,
-         ) -> list[tuple[Runner, list[TrainConfig], bool]]:
+         seeds: tuple[int, ...], rates: Rates | None = None) -> list[tuple[Runner, list[TrainConfig], bool]]:
     """Every network run of the table, as ``Runner.prefetch`` takes them: ``runners`` maps air on (True) / off
     to the runner on that data; ``rates``: each cell's grid rates (:func:`candidates`)."""
     return [(runners[c.air], [dataclasses.replace(cand, seed=s) for name, cfg in network_configs(cfgs, c).items()
                               for cand in candidates(cfg, _grid(name, rates)) for s in seeds], True) for c in cols]
 
 
-def _grid(name: Trained, rates: Mapping[str, tuple[float, ...]] | None) -> Mapping[str, tuple[float, ...]]:
+def _grid(name: Trained, rates: Rates | None) -> Rates:
     """The rates row ``name`` chooses among: none for the row trained exact (Table 1's network as it is)."""
-    return rates or {} if name in NETWORKS else {}
+    if name not in NETWORKS or rates is None:
+        return {}
+    return rates
 
 
 def chosen(runner: Runner, cands: Sequence[TrainConfig], seeds: tuple[int, ...], desc: str = "runs") -> TrainConfig:
@@ -117,9 +122,22 @@ def chosen(runner: Runner, cands: Sequence[TrainConfig], seeds: tuple[int, ...],
     def rank(i: int) -> tuple[float, float, int]:
         runs = runner.train_runs(cands[i], (cands[i].dims,), seeds, desc=desc)
         return -float(np.mean(runs.val_accuracies())), float(np.mean([r.val_loss for r in runs])), i
-    best = min(range(len(cands)), key=rank)
-    runner.reject(dataclasses.replace(c, seed=s) for i, c in enumerate(cands) if i != best for s in seeds)
-    return cands[best]
+    return cands[min(range(len(cands)), key=rank)]
+
+
+def turned_down(cfgs: Mapping[Trained, TrainConfig], cols: Sequence[Column], seeds: tuple[int, ...], rates: Rates,
+                picked: Mapping[tuple[Trained, str], float]) -> dict[bool, list[TrainConfig]]:
+    """The runs the chapter trained as candidates and used nowhere, by air on (True) / off (each air setting is its
+    own data): ``picked[row, column key]`` is the rate each row's column chose. A run one column turns down and
+    another row uses (an exact column's config can be the row trained exact's) is used."""
+    cands: dict[bool, set[TrainConfig]] = {True: set(), False: set()}
+    used: dict[bool, set[TrainConfig]] = {True: set(), False: set()}
+    for c in cols:
+        for name, cfg in network_configs(cfgs, c).items():
+            for cand in candidates(cfg, _grid(name, rates)):
+                runs = {dataclasses.replace(cand, seed=s) for s in seeds}
+                (used if cand.lr == picked[name, c.key] else cands)[c.air].update(runs)
+    return {air: sorted(cands[air] - used[air], key=repr) for air in cands}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -152,7 +170,7 @@ class Entry:
 
 
 def column_entries(runner: Runner, cfgs: Mapping[Trained, TrainConfig], column: Column, seeds: tuple[int, ...],
-                   contact_height: float, rates: Mapping[str, tuple[float, ...]] | None = None) -> list[Entry]:
+                   contact_height: float, rates: Rates | None = None) -> list[Entry]:
     """Every learner of :data:`LEARNERS` trained and tested on ``column``, with ``runner`` on the column's data
     (air on or off), in the table's order: the networks trained on the column's condition, each at the rate of its
     grid the column's validation chose (:func:`chosen`; ``rates`` as :func:`plan`'s), MiniRocket once per seed (the
@@ -341,14 +359,23 @@ class Motion:
 
     @property
     def gru_point(self) -> str:
-        """The GRU's truncation, and the rate each column chose (:func:`chosen`) where it is not the grid's pick."""
         c = self.configs["gru_velocity"]
-        moved = [col.heading for col in self.columns if self.entries["gru_velocity", col.key].lr not in (None, c.lr)]
-        other = {self.entries["gru_velocity", col.key].lr for col in self.columns} - {c.lr}
-        words = f"lr {c.lr:g}, truncation {c.truncation}"
-        if not moved:
-            return words
-        return f"{words}; lr {', '.join(f'{lr:g}' for lr in sorted(other))} where its column's validation chose it: {'; '.join(moved)}"
+        return f"lr {c.lr:g}, truncation {c.truncation}"
+
+    @property
+    def rates_moved(self) -> str:
+        """Where a column chose a network's rate other than its grid's pick (:func:`chosen`), grouped by rate:
+        ``the GRU with velocity: lr 0.001 in air on, 4 cm at 55 m``; or that none did."""
+        parts = []
+        for name in NETWORKS:
+            base = self.configs[name].lr
+            by_rate: dict[float, list[str]] = {}
+            for col in self.columns:
+                lr = self.entries[name, col.key].lr
+                if lr is not None and lr != base:
+                    by_rate.setdefault(lr, []).append(col.heading)
+            parts += [f"the {NAMES[name]}: lr {lr:g} in {'; '.join(heads)}" for lr, heads in sorted(by_rate.items())]
+        return "; ".join(parts) if parts else "no column chose another rate than its grid's"
 
     def _velocity_gain(self, air: Air) -> str:
         vel, pos = (self.entries[n, f"{air}.exact"].interval.value for n in ("peephole_velocity", "peephole_positions"))
@@ -475,4 +502,7 @@ def compute(runner: Runner, cfgs: Mapping[Trained, TrainConfig] | None = None,
     contact = runner.synth_config.shape.bounding_radius
     entries = {(e.learner, c.key): e for c in cols
                for e in column_entries(on[c.air], cfgs, c, seeds, contact, rates)}
+    picked = {key: e.lr for key, e in entries.items() if e.lr is not None}
+    for air, runs in turned_down(cfgs, cols, seeds, rates, picked).items():  # type: ignore[arg-type]
+        on[air].reject(runs)
     return report(runner.synth_config, cfgs, cols, entries, calibrated.drop, fitted_on)

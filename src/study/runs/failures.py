@@ -54,8 +54,7 @@ DESIGNED: tuple[Designed, ...] = (
 """Every kind of run the book means to fail, the first that applies naming the reason."""
 
 BY_CHANCE = "not designed to fail: a failure by chance, to explain"
-REJECTED = ("a candidate its chapter's validation turned down (a rate the motion chapter tried again through a "
-            "camera and did not choose): it counts in no result")
+REJECTED = "a candidate its chapter's validation turned down (a grid's rate not chosen): it counts in no result"
 
 
 def reason(config: Mapping[str, Any], fps: float | None = None) -> str:
@@ -101,7 +100,8 @@ def unsettled(record: Mapping[str, Any]) -> bool:
 def listed(planned: Mapping[str, tuple[str, Path]], rejected: frozenset[str] = frozenset(),
            ) -> dict[str, list[dict[str, Any]]]:
     """One pass over a build's plan (model key -> (its record's path, the chapter's plan file)): ``failed_runs``,
-    every failed run with its reason (:data:`REJECTED` for a model in ``rejected``, else :func:`reason`), and
+    every failed run with its reason (:func:`reason`'s designed one, else :data:`REJECTED` for a model in
+    ``rejected``, else :data:`BY_CHANCE`), and
     ``unsettled_runs``, every run still improving at its budget (:func:`unsettled`); each with the chapter that
     first asked for it and what it is. A record that cannot be read is left out."""
     out: dict[str, list[dict[str, Any]]] = {"failed_runs": [], "unsettled_runs": []}
@@ -113,7 +113,8 @@ def listed(planned: Mapping[str, tuple[str, Path]], rejected: frozenset[str] = f
                    **{k: c[k] for k in ("dims", "length", "cell", "inputs", "observe", "lr", "truncation", "seed")},
                    **{k: rec.get(k) for k in ("best_epoch", "epochs_run", "val_accuracy")}}
             if rec.get("failed"):
-                why = REJECTED if model in rejected else reason(c, rec.get("fps"))
+                why = reason(c, rec.get("fps"))
+                why = REJECTED if why == BY_CHANCE and model in rejected else why
                 out["failed_runs"].append({**row, "reason": why})
             if unsettled(rec):
                 out["unsettled_runs"].append(row)
