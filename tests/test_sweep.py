@@ -201,3 +201,22 @@ def test_the_sweeps_camera_and_marks_are_placed_about_the_centres_its_truth_hold
                 matched += 1
                 assert np.allclose(sweep.marks_about(frames), sweep.marks_about(xyz), atol=1e-6, rtol=0)
     assert matched == len(clips), f"{matched} of {len(clips)} clips' truth found among the throws' frame paths"
+
+
+def test_a_path_that_answers_fewer_clips_is_trusted_on_those_it_answered():
+    from types import SimpleNamespace
+
+    clips = [SimpleNamespace(video=SimpleNamespace(label="heavy" if i % 2 else "light"),
+                             shot=SimpleNamespace(family="low", height_px=480)) for i in range(8)]
+    tracked = [camera_cost.Heights(np.zeros(30), {k: np.zeros(30) for k in camera_cost.MEASURED}, {})
+               for _ in clips]
+    x = {k: np.zeros((8, 30, 3), np.float32) for k in ("exact", *camera_cost.MEASURED)}
+    missing = {k: np.zeros(8, bool) for k in x}
+    missing[camera_cost.FOUND][:4] = True  # its marks were not found on the first four clips: no answer there
+    got = camera_cost.measure([_Says(True)], clips, tracked, (x, missing)).results["all"]  # "heavy" to every clip
+    found, exact = got[camera_cost.FOUND], got["exact"]
+    assert exact.accuracy.value == exact.answered.value == 0.5
+    assert found.no_heights == 4 and found.accuracy.value == 0.25, "a clip without heights is a miss"
+    assert found.answered.value == 0.5, "an answer the path gave is right as often as the model is"
+    missing[camera_cost.FOUND][:] = True
+    assert camera_cost.measure([_Says(True)], clips, tracked, (x, missing)).results["all"][camera_cost.FOUND].answered is None

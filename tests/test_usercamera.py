@@ -27,10 +27,10 @@ def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> u
     per = {"all": 0.6, "low": 0.7, "high": 0.5, "480p": 0.6, "720p": 0.6}
     res = {}
     for g, acc in per.items():
-        rows = {"exact": camera_cost.PathResult(_iv(0.8), None, 0.0, 0.0, 0)}
+        rows = {"exact": camera_cost.PathResult(_iv(0.8), None, 0.0, 0.0, 0, _iv(0.8))}
         for k in camera_cost.PATHS:
             a = acc + (best_path_gain if k == "gravity" else 0.0)
-            rows[k] = camera_cost.PathResult(_iv(a), _iv(0.8 - a), 150.0, 100.0, 0)
+            rows[k] = camera_cost.PathResult(_iv(a), _iv(0.8 - a), 150.0, 100.0, 0, _iv(a))
         res[g] = rows
     correct = {k: np.zeros((3, len(clips)), bool) for k in ("exact", *camera_cost.PATHS)}
     correct["mean silhouette"][:, :12] = True  # 60 %

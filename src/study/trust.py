@@ -34,8 +34,9 @@ class Trust:
     """How far one answer can be trusted."""
 
     accuracy: Interval | None
-    """The share of the camera sweep's throws that models of this kind labelled right through this path, with its
-    95 % interval (None: not measured; :attr:`source` says why)."""
+    """The share of the camera sweep's throws that models of this kind labelled right through this path, of those
+    the path turned into heights (an answer exists only there), with its 95 % interval (None: not measured;
+    :attr:`source` says why)."""
     source: str
     """Where :attr:`accuracy` comes from, or why there is none."""
     band: tuple[float, float] | None = None
@@ -104,7 +105,7 @@ def for_answer(kind: str, path: str, seen: Measurements, band: tuple[float, floa
     if kind not in measured:
         return Trust(None, f"{source} scored no model of this kind ({kind}; it scored {', '.join(measured)})", band)
     got = measured[kind].get(path)
-    said = "" if got is not None else " (not measured there)"
+    said = ", on the throws it gave heights for" if got is not None else " (not measured there)"
     return Trust(got, f"{source}: models of this kind ({kind}) through the {words} path{said}", band)
 
 

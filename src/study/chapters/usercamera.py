@@ -124,8 +124,10 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
                                       f"camera sweep ({g}): least one-scale height error", unit="mm"), by_path)
     drag = {PATH_KEYS[k]: number(iv, f"camera sweep: drag rule's accuracy, heights {k}") for k, iv in cs.drag.items()}
     cpu, _, timed = cs.render_s
-    kinds = {cs.kinds[name]: {PATH_KEYS[k]: number(r.accuracy, f"camera sweep: {name}'s accuracy, heights {k}")
-                              for k, r in m.results["all"].items()} for name, m in cs.measured.items()}
+    kinds = {cs.kinds[name]: {PATH_KEYS[k]: number(r.answered, f"camera sweep: {name}'s accuracy on the clips "
+                                                   f"that gave heights {k}", no_heights=r.no_heights)
+                              for k, r in m.results["all"].items() if r.answered is not None}
+             for name, m in cs.measured.items()}
     return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]
                  number(cpu, "camera sweep: CPU seconds to render the clips", unit="s") if timed == len(cs.clips)
                  else None, kinds)

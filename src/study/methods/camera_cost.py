@@ -283,6 +283,9 @@ class PathResult:
     """The same after removing each clip's median error (what one offset cannot fix), millimetres."""
     no_heights: int
     """Clips the path could not turn into heights."""
+    answered: Interval | None = None
+    """Accuracy over the clips the path did turn into heights and the model's seeds: what an answer the path gave
+    can be trusted to (None: it turned none)."""
 
 
 def track_clips(clips: Sequence[Clip], shape: ObjectShape, progress: bool = True) -> list[Heights]:
@@ -351,10 +354,11 @@ def measure(members: Sequence, clips: Sequence[Clip], tracked: Sequence[Heights]
         out[g] = {}
         for k in x:
             raw, centred = rms_mm([errors[k][i] for i in np.flatnonzero(sel)])
+            seen = sel & ~missing[k]
             out[g][k] = PathResult(
                 bootstrap_accuracy(correct[k][:, sel]),
                 None if k == "exact" else bootstrap_difference(correct["exact"][:, sel], correct[k][:, sel]),
-                raw, centred, int(missing[k][sel].sum()))
+                raw, centred, int(missing[k][sel].sum()), bootstrap_accuracy(correct[k][:, seen]) if seen.any() else None)
     return Measured(out, correct, groups)
 
 

@@ -59,8 +59,9 @@ class Sweep(Reported):
     render_cpu_s: Number | None = None
     """CPU seconds the clips took to render, as recorded when they were made (None: not recorded)."""
     kinds: dict[str, dict[SweepKey, Number]] = named("kind", default_factory=dict)
-    """Every candidate, by its kind (``study.runs.measured.kind``): its accuracy on all clips, exact heights and
-    by each path (what an answer quotes for a model of that kind)."""
+    """Every candidate, by its kind (``study.runs.measured.kind``): its accuracy on exact heights and by each path,
+    over the clips that path turned into heights (what an answer quotes for a model of that kind: an answer exists
+    only where its path gave heights; each number's source says how many clips gave none)."""
 
 
 @dataclass(frozen=True)
