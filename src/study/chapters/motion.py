@@ -101,19 +101,20 @@ def candidates(cfg: TrainConfig, rates: Rates) -> list[TrainConfig]:
     return [cfg] + [dataclasses.replace(cfg, lr=lr) for lr in rates.get(cfg.cell, ()) if lr != cfg.lr]
 
 
+def row_candidates(cfgs: Mapping[Trained, TrainConfig], column: Column, rates: Rates | None
+                   ) -> dict[Trained, list[TrainConfig]]:
+    """Each row's :func:`candidates` in ``column`` (:func:`network_configs`); the row trained exact has its own
+    config only (Table 1's network as it is)."""
+    return {name: candidates(cfg, (rates or {}) if name in NETWORKS else {})
+            for name, cfg in network_configs(cfgs, column).items()}
+
+
 def plan(runners: Mapping[bool, Runner], cfgs: Mapping[Trained, TrainConfig], cols: Sequence[Column],
          seeds: tuple[int, ...], rates: Rates | None = None) -> list[tuple[Runner, list[TrainConfig], bool]]:
     """Every network run of the table, as ``Runner.prefetch`` takes them: ``runners`` maps air on (True) / off
     to the runner on that data; ``rates``: each cell's grid rates (:func:`candidates`)."""
-    return [(runners[c.air], [dataclasses.replace(cand, seed=s) for name, cfg in network_configs(cfgs, c).items()
-                              for cand in candidates(cfg, _grid(name, rates)) for s in seeds], True) for c in cols]
-
-
-def _grid(name: Trained, rates: Rates | None) -> Rates:
-    """The rates row ``name`` chooses among: none for the row trained exact (Table 1's network as it is)."""
-    if name not in NETWORKS or rates is None:
-        return {}
-    return rates
+    return [(runners[c.air], [dataclasses.replace(cand, seed=s) for cands in row_candidates(cfgs, c, rates).values()
+                              for cand in cands for s in seeds], True) for c in cols]
 
 
 def chosen(runner: Runner, cands: Sequence[TrainConfig], seeds: tuple[int, ...], desc: str = "runs") -> TrainConfig:
@@ -130,14 +131,14 @@ def turned_down(cfgs: Mapping[Trained, TrainConfig], cols: Sequence[Column], see
     """The runs the chapter trained as candidates and used nowhere, by air on (True) / off (each air setting is its
     own data): ``picked[row, column key]`` is the rate each row's column chose. A run one column turns down and
     another row uses (an exact column's config can be the row trained exact's) is used."""
-    cands: dict[bool, set[TrainConfig]] = {True: set(), False: set()}
+    down: dict[bool, set[TrainConfig]] = {True: set(), False: set()}
     used: dict[bool, set[TrainConfig]] = {True: set(), False: set()}
     for c in cols:
-        for name, cfg in network_configs(cfgs, c).items():
-            for cand in candidates(cfg, _grid(name, rates)):
+        for name, cands in row_candidates(cfgs, c, rates).items():
+            for cand in cands:
                 runs = {dataclasses.replace(cand, seed=s) for s in seeds}
-                (used if cand.lr == picked[name, c.key] else cands)[c.air].update(runs)
-    return {air: sorted(cands[air] - used[air], key=repr) for air in cands}
+                (used if cand.lr == picked[name, c.key] else down)[c.air].update(runs)
+    return {air: sorted(down[air] - used[air], key=repr) for air in down}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -181,8 +182,8 @@ def column_entries(runner: Runner, cfgs: Mapping[Trained, TrainConfig], column: 
     T = cfgs["peephole_positions"].n_frames(ds.fps)
     x_train, x_test = column.inputs(ds, T)
     tests = {"test": (x_test, ds.test.y)}
-    nets = {name: chosen(runner, candidates(cfg, _grid(name, rates)), seeds, desc=f"{column.key} {name}")
-            for name, cfg in network_configs(cfgs, column).items()}
+    nets = {name: chosen(runner, cands, seeds, desc=f"{column.key} {name}")
+            for name, cands in row_candidates(cfgs, column, rates).items()}
     fitted: list[tuple[learners.Learner, np.ndarray | None]] = [
         (learners.Network(name, cfg, seeds, desc=f"{column.key} {name}"), None) for name, cfg in nets.items()]
     fitted += [(learners.Rocket("z", T, seeds), None if column.noise is None else x_train),

@@ -41,31 +41,35 @@ def local_cluster(workers: int) -> Any:
                         dashboard_address=None)
 
 
-def _planned(parts: Sequence[Path]) -> dict[str, tuple[str, Path]]:
-    """Each distinct model of the plan files ``parts``: its record's path and the first part that lists it."""
-    models: dict[str, tuple[str, Path]] = {}
+def _entries(parts: Sequence[Path]) -> list[tuple[Path, dict[str, Any]]]:
+    """Every line of the plan files ``parts`` that reads as a JSON object, with the part it is in (a missing file
+    has none)."""
+    out = []
     for part in parts:
         if not part.is_file():
             continue
         for line in part.read_text().splitlines():
-            with contextlib.suppress(ValueError, KeyError, TypeError):
+            with contextlib.suppress(ValueError):
                 entry = json.loads(line)
-                models.setdefault(str(entry["model"]), (str(entry["record"]), part))
+                if isinstance(entry, dict):
+                    out.append((part, entry))
+    return out
+
+
+def _planned(entries: Sequence[tuple[Path, dict[str, Any]]]) -> dict[str, tuple[str, Path]]:
+    """Each distinct model of a plan's ``entries`` (:func:`_entries`): its record's path and the first part that
+    lists it (a line without a record, ``schedule.Plan.reject``'s, adds none)."""
+    models: dict[str, tuple[str, Path]] = {}
+    for part, entry in entries:
+        if "model" in entry and "record" in entry:
+            models.setdefault(str(entry["model"]), (str(entry["record"]), part))
     return models
 
 
-def _rejected(parts: Sequence[Path]) -> frozenset[str]:
-    """The models the plan files ``parts`` say a chapter trained as candidates and did not choose
+def _rejected(entries: Sequence[tuple[Path, dict[str, Any]]]) -> frozenset[str]:
+    """The models a plan's ``entries`` say a chapter trained as candidates and did not choose
     (``schedule.Plan.reject``)."""
-    out: set[str] = set()
-    for part in parts:
-        if part.is_file():
-            for line in part.read_text().splitlines():
-                with contextlib.suppress(ValueError, KeyError, TypeError, AttributeError):
-                    entry = json.loads(line)
-                    if entry.get("rejected"):
-                        out.add(str(entry["model"]))
-    return frozenset(out)
+    return frozenset(str(e["model"]) for _, e in entries if e.get("rejected") and "model" in e)
 
 
 def _totals(records: Sequence[str]) -> dict[str, float]:
@@ -84,7 +88,7 @@ def plan_totals(parts: Sequence[Path]) -> dict[str, float]:
     took to train (``cpu_seconds``: each record's ``cpu_seconds``, or its wall ``train_seconds`` if it was made
     before that was kept), the epochs they ran (``epochs``) and how many failed to train (``failed``); a record
     that is missing counts nothing but its model."""
-    return _totals([record for record, _ in _planned(parts).values()])
+    return _totals([record for record, _ in _planned(_entries(parts)).values()])
 
 
 def plan_listed(parts: Sequence[Path]) -> dict[str, list[dict[str, Any]]]:
@@ -92,13 +96,14 @@ def plan_listed(parts: Sequence[Path]) -> dict[str, list[dict[str, Any]]]:
     their records (``study.runs.failures.listed``)."""
     from study.runs.failures import listed
 
-    return listed(_planned(parts), _rejected(parts))
+    entries = _entries(parts)  # each plan file read once
+    return listed(_planned(entries), _rejected(entries))
 
 
 def plan_by_part(parts: Sequence[Path]) -> dict[str, dict[str, float]]:
     """:func:`plan_totals` of each plan file (by its name without suffix: the chapter), each model counted in the
     first part that lists it, so the parts add up to the whole: where a build's training time goes."""
     by: dict[Path, list[str]] = {p: [] for p in parts}
-    for record, part in _planned(parts).values():
+    for record, part in _planned(_entries(parts)).values():
         by[part].append(record)
     return {p.stem: _totals(records) for p, records in by.items() if records}
