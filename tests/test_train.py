@@ -347,9 +347,38 @@ def test_a_slow_starter_gets_the_plateau_allowance_to_leave_the_plateau(ds):
     assert _stops(ds, cfg, [0.69] * 150) == 99, "never leaves: stops after the allowance"
 
 
-def test_plateau_schedule_halves_the_rate_when_validation_stalls(ds):
-    cfg = dataclasses.replace(FROZEN, lr=1e-6, lr_schedule="plateau", patience=4, min_epochs=6, epochs=6)
-    lrs = [h["lr"] for h in train.fit(ds, cfg, progress=False).history]
+def _rates(ds, cfg: train.TrainConfig, val_losses: list[float]) -> list[float]:
+    """The learning rate after each epoch of a run shown ``val_losses``, epoch by epoch (:func:`train.end_epoch`)."""
+    r = train.Run(train.stack.member(ds, cfg, torch.device("cpu")))
+    out = []
+    for epoch, loss in enumerate(val_losses):
+        train.end_epoch(r, epoch, loss, 0.5)
+        out.append(r.opt.param_groups[0]["lr"])
+    return out
+
+
+def test_plateau_schedule_halves_the_rate_when_validation_stalls_after_leaving_the_plateau(ds):
+    """The protocol comparison's XYZ seed 1 of the cold build at 9217b0c: its rate halved every 5 epochs while it
+    sat on the initial plateau, to 1/256 by epoch 45, and it never left. Today the schedule waits, as patience
+    does, until the loss has left the plateau; after that a stall of ``patience // 4`` epochs halves it."""
+    cfg = dataclasses.replace(TINY, lr=1e-3, lr_schedule="plateau", patience=20, epochs=200)
+    on_plateau = [0.6931] * 40
+    assert _rates(ds, cfg, on_plateau) == [1e-3] * 40, "no halving while on the plateau"
+    left = [0.6931] * 10 + [0.5, 0.45] + [0.46] * 12
+    rates = _rates(ds, cfg, left)
+    assert rates[:17] == [1e-3] * 17, "best at epoch 11; 5 epochs without a lower loss are allowed"
+    assert rates[17] == pytest.approx(5e-4) and rates[-1] < rates[17], "then it halves, and again"
+    assert _rates(ds, dataclasses.replace(cfg, lr_schedule="constant"), left) == [1e-3] * len(left)
+
+
+def test_plateau_schedule_halves_the_rate_in_training(ds):
+    """The real loop: a run that leaves the plateau and then stalls has its rate halved (the toy's loss leaves the
+    plateau within its first epochs at this rate)."""
+    cfg = dataclasses.replace(TINY, lr=3e-2, lr_schedule="plateau", patience=4, min_epochs=30, epochs=30,
+                              plateau_epochs=30)
+    tm = train.fit(ds, cfg, progress=False, warn=False)
+    lrs = [h["lr"] for h in tm.history]
+    assert min(h["val_loss"] for h in tm.history) < train.PLATEAU_LOSS, "the toy run leaves the plateau"
     assert lrs[0] == cfg.lr and lrs[-1] < lrs[0] and all(b <= a for a, b in zip(lrs, lrs[1:]))
 
 

@@ -97,7 +97,7 @@ class TrainConfig:
     """Clip the gradient's global norm to this before each step; 0: no clipping."""
     lr_schedule: Schedule = "constant"
     """'constant'; 'plateau': halve the learning rate when the validation loss has not improved for a quarter of
-    ``patience`` epochs; or 'cosine': ``epochs`` epochs whatever happens (no early stopping), the rate rising
+    ``patience`` epochs, counted once it has left the initial plateau (as patience is); or 'cosine': ``epochs`` epochs whatever happens (no early stopping), the rate rising
     linearly over ``warmup_epochs`` and then falling along a half cosine to ``lr_floor`` of itself."""
     warmup_epochs: int = 0
     """With 'cosine': epochs of linear warm-up, the rate rising from ``lr / warmup_epochs`` to ``lr`` (at most

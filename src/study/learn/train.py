@@ -167,7 +167,8 @@ class Run:
 
 def optimiser(params: torch.Tensor, cfg: TrainConfig) -> tuple[torch.optim.Optimizer, Any]:
     """Adam on ``params`` (one flat leaf (P,)) at ``cfg.lr``, and the schedule that reacts to the validation loss
-    ('plateau': halve the rate after ``patience // 4`` epochs without a lower loss), or None (a cosine budget sets
+    ('plateau': halve the rate after ``patience // 4`` epochs without a lower loss, once the run has left the initial
+    plateau: :func:`end_epoch`), or None (a cosine budget sets
     each epoch's rate in :func:`_train_epoch`; 'constant' never changes it)."""
     opt = torch.optim.Adam([params], lr=cfg.lr, foreach=False)
     sched = (torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=max(1, cfg.patience // 4))
@@ -189,18 +190,21 @@ def step(r: Run, loss: float, n: int) -> None:
 
 
 def end_epoch(r: Run, epoch: int, val_loss: float, val_acc: float) -> None:
-    """The end of ``r``'s epoch: its history, its schedule, its best weights, and whether it stops.
+    """The end of ``r``'s epoch: its history, its best weights, its schedule, and whether it stops.
 
     It stops ``patience`` epochs after its best one, not before ``min_epochs``, patience counted from the epoch
-    its validation loss left the plateau; a run still on the plateau after ``plateau_epochs`` stops there."""
+    its validation loss left the plateau; a run still on the plateau after ``plateau_epochs`` stops there. The
+    'plateau' schedule, like patience, starts counting once the run has left the initial plateau: halving the rate
+    while it is still there only kept it there (the cold build at 9217b0c: a run halved to 1/256 of its rate by
+    epoch 45 never left)."""
     r.history.append({"epoch": epoch, "train_loss": r.total / len(r.m.y_tr), "val_loss": val_loss,
                       "val_accuracy": val_acc, "lr": r.opt.param_groups[0]["lr"]})
-    if r.sched is not None:
-        r.sched.step(val_loss)
     if val_loss < r.best_loss:
         r.best_loss, r.best_epoch, r.best = val_loss, epoch, r.kept.clone()
     if r.left_plateau is None and val_loss < PLATEAU_LOSS:
         r.left_plateau = epoch
+    if r.sched is not None and r.left_plateau is not None:  # halving on the plateau would only bury it there
+        r.sched.step(val_loss)
     if not r.cfg.stops_early:
         return
     if r.left_plateau is None:
