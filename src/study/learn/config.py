@@ -35,7 +35,8 @@ Inputs = Literal["positions", "velocity", "speed"]
 frame-to-frame velocity; or what of them does not depend on the throw's heading, the height, its velocity and the
 horizontal speed (``study.learn.model.Features``)."""
 Schedule = Literal["constant", "plateau", "cosine"]
-"""Learning-rate schedules: fixed; halved when the validation loss stalls for ``patience // 4`` epochs; or a fixed
+"""Learning-rate schedules: fixed; halved when the validation loss, once off the initial plateau, stalls for more
+than ``patience // 4`` epochs; or a fixed
 budget of ``epochs``, a linear warm-up over ``warmup_epochs`` then a cosine decay to ``lr_floor`` of the rate
 (no early stopping: a run trains its whole budget and keeps its best validation epoch)."""
 Average = Literal["none", "ema"]
@@ -96,8 +97,8 @@ class TrainConfig:
     clip_norm: float = 1.0
     """Clip the gradient's global norm to this before each step; 0: no clipping."""
     lr_schedule: Schedule = "constant"
-    """'constant'; 'plateau': halve the learning rate when the validation loss has not improved for a quarter of
-    ``patience`` epochs, counted once it has left the initial plateau (as patience is); or 'cosine': ``epochs`` epochs whatever happens (no early stopping), the rate rising
+    """'constant'; 'plateau': halve the learning rate when the validation loss has not improved for more than a
+    quarter of ``patience`` epochs, counted once the loss has left the initial plateau (as patience is); or 'cosine': ``epochs`` epochs whatever happens (no early stopping), the rate rising
     linearly over ``warmup_epochs`` and then falling along a half cosine to ``lr_floor`` of itself."""
     warmup_epochs: int = 0
     """With 'cosine': epochs of linear warm-up, the rate rising from ``lr / warmup_epochs`` to ``lr`` (at most

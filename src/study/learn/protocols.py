@@ -44,7 +44,7 @@ PROTOCOLS: tuple[Protocol, ...] = (
     Protocol("min_epochs", "+ early stopping after a minimum, higher cap", {"clip_norm": 0.0, **_RAW}),
     Protocol("clipping", "+ gradient clipping (norm 1)", _RAW),
     Protocol("average", "+ weights averaged (EMA): the study's protocol", {}, study=True),
-    Protocol("plateau", "+ learning rate halved on plateaus", {"lr_schedule": "plateau"}),
+    Protocol("plateau", "+ learning rate halved when validation stalls", {"lr_schedule": "plateau"}),
 )
 """Every protocol, in the order each adds its change."""
 

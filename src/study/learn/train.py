@@ -2,7 +2,7 @@
 
 Read top to bottom: :func:`fit` trains one run; :func:`train_runs` trains many runs of one shape together; below
 them, the recipe -- :func:`optimiser` (Adam and the learning-rate schedule), :func:`step` (clipping, the update,
-the weights' moving average), :func:`end_epoch` (the history, the best weights, the stop) -- and the loop that
+the weights' moving average), :func:`end_epoch` (the history, the best weights, the schedule, the stop) -- and the loop that
 calls them. ``study.learn.stack`` holds only what running many runs in one pass needs (the stacked forward pass,
 each member's data and random numbers); every cell, ``nn.LSTM`` included, trains through this loop.
 
@@ -18,7 +18,7 @@ Early stopping (:func:`end_epoch`): a run keeps the weights of its lowest valida
 epochs after it, but never before ``min_epochs``, and patience starts counting only once the validation loss has
 left the initial plateau (:data:`study.learn.metrics.PLATEAU_LOSS`): a run still on it after ``plateau_epochs`` has
 failed to train and stops there, a slow starter gets that long to leave it, and a one-epoch blip on the plateau
-cannot end a run that was about to leave it.
+cannot end a run that was about to leave it. The 'plateau' schedule waits for the same epoch before it halves.
 
 Determinism: a run seeds everything from ``cfg.seed`` (the split permutation with NumPy; the weights, batch order
 and dropout masks with torch, from a generator of its own started inside a forked RNG, so the caller's RNG is left
@@ -167,8 +167,8 @@ class Run:
 
 def optimiser(params: torch.Tensor, cfg: TrainConfig) -> tuple[torch.optim.Optimizer, Any]:
     """Adam on ``params`` (one flat leaf (P,)) at ``cfg.lr``, and the schedule that reacts to the validation loss
-    ('plateau': halve the rate after ``patience // 4`` epochs without a lower loss, once the run has left the initial
-    plateau: :func:`end_epoch`), or None (a cosine budget sets
+    ('plateau': halve the rate once more than ``patience // 4`` epochs have passed without a lower loss, counted from
+    the epoch the run left the initial plateau: :func:`end_epoch`), or None (a cosine budget sets
     each epoch's rate in :func:`_train_epoch`; 'constant' never changes it)."""
     opt = torch.optim.Adam([params], lr=cfg.lr, foreach=False)
     sched = (torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=max(1, cfg.patience // 4))
@@ -195,8 +195,8 @@ def end_epoch(r: Run, epoch: int, val_loss: float, val_acc: float) -> None:
     It stops ``patience`` epochs after its best one, not before ``min_epochs``, patience counted from the epoch
     its validation loss left the plateau; a run still on the plateau after ``plateau_epochs`` stops there. The
     'plateau' schedule, like patience, starts counting once the run has left the initial plateau: halving the rate
-    while it is still there only kept it there (the cold build at 9217b0c: a run halved to 1/256 of its rate by
-    epoch 45 never left)."""
+    while it is still there only kept it there (the cold build at 9217b0c: a run halved every 6 epochs, to 1/256 of
+    its rate from epoch 49, never left)."""
     r.history.append({"epoch": epoch, "train_loss": r.total / len(r.m.y_tr), "val_loss": val_loss,
                       "val_accuracy": val_acc, "lr": r.opt.param_groups[0]["lr"]})
     if val_loss < r.best_loss:
