@@ -21,22 +21,24 @@ import sys
 from collections import Counter
 from pathlib import Path
 
+from study.book import results
+from study.core.errors import DataError
+
 RENDER = "usercamera.sweep.render_cpu_s"
 """The results' name for the CPU seconds the camera sweep's clips took to render."""
 
 
-def sweep_render_cpu(results: dict) -> float | None:
-    """CPU seconds the build's camera sweep took to render (its results' :data:`RENDER`), or None if not there."""
-    for n in results.get("numbers", []):
-        if n.get("name") == RENDER:
-            return float(n["value"])
-    return None
+def sweep_render_cpu(path: Path) -> float | None:
+    """CPU seconds the camera sweep of the build whose results file is ``path`` took to render (:data:`RENDER`), or
+    None if it has no such number; ``study.core.errors.DataError`` naming the file if it cannot be read."""
+    leaf = results.load(path).get(RENDER)
+    return None if leaf is None else float(leaf.value)
 
 
 def report(timings: dict, render_s: float | None, cores: int) -> list[str]:
     """The lines :func:`main` prints."""
-    lines = [f"wall {timings['wall_seconds'] / 60:.1f} min, the builder's own process {timings['cpu_seconds'] / 60:.1f} "
-             f"CPU-min (preset {timings['preset']}, device {timings['device']})"]
+    lines = [f"wall {timings['wall_seconds'] / 60:.1f} min, the builder's own process "
+             f"{timings['cpu_seconds'] / 60:.1f} CPU-min (preset {timings['preset']}, device {timings['device']})"]
     chapters = {k: v for k, v in timings["chapters"].items() if not v.get("cached")}
     lines.append("chapters executed (wall, min; + executions that stopped for runs): " + ", ".join(
         f"{k} {v['seconds'] / 60:.1f}" + (f" (+{v['waited'] / 60:.1f})" if v.get("waited") else "")
@@ -70,15 +72,12 @@ def main(argv: list[str] | None = None) -> int:
     if a.cores < 1:
         print(f"build_time: --cores {a.cores}: give the number of cores the build ran on (1 or more)", file=sys.stderr)
         return 2
-    results = a.results or a.timings.parent.parent / "results.json"
-    render_s = None
-    if a.results or results.is_file():
-        try:
-            render_s = sweep_render_cpu(json.loads(results.read_text()))
-        except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
-            print(f"build_time: {results}: cannot read it as a build's results ({type(e).__name__}: {e}); pass the "
-                  "build's _build/results.json with --results", file=sys.stderr)
-            return 2
+    beside = a.results or a.timings.parent.parent / "results.json"
+    try:
+        render_s = sweep_render_cpu(beside) if a.results or beside.is_file() else None
+    except DataError as e:
+        print(f"build_time: {e}", file=sys.stderr)
+        return 2
     try:
         lines = report(json.loads(a.timings.read_text()), render_s, a.cores)
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:

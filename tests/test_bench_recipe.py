@@ -2,19 +2,11 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
-SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_recipe.py"
+import scripts_toys
 
 
 def _bench():
-    spec = importlib.util.spec_from_file_location("bench_recipe", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # its dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    return scripts_toys.script("benchmarks/bench_recipe.py")
 
 
 def _row(b, recipe, val, swing, epochs, failed=0, test=50.0, climb=0.0):

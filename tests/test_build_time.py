@@ -3,20 +3,18 @@ cold build's wall time by the cores; a file that is not a build's, and a bad --c
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import pytest
+import scripts_toys
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "build_time.py"
+from study.book import results
+from study.report import reported
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("build_time", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return scripts_toys.script("scripts/build_time.py")
 
 
 TIMINGS = {"preset": "paper", "device": "cpu", "wall_seconds": 600.0, "cpu_seconds": 60.0,
@@ -33,8 +31,9 @@ TIMINGS = {"preset": "paper", "device": "cpu", "wall_seconds": 600.0, "cpu_secon
 def _build(tmp_path: Path) -> Path:
     (tmp_path / "_build" / "executed").mkdir(parents=True)
     (tmp_path / "_build" / "executed" / "timings.json").write_text(json.dumps(TIMINGS))
-    (tmp_path / "_build" / "results.json").write_text(json.dumps(
-        {"numbers": [{"name": "usercamera.sweep.render_cpu_s", "value": 600.0}]}))
+    render = reported.number(600.0, "camera sweep: CPU seconds to render the clips", unit="s")
+    (tmp_path / "_build" / "results.json").write_text(
+        results.dumps([("usercamera.sweep.render_cpu_s", render)], preset="paper"))
     return tmp_path / "_build" / "executed" / "timings.json"
 
 

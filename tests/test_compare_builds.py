@@ -4,23 +4,18 @@ number that moved (or a verdict that changed) after the second format renamed th
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import json
 from pathlib import Path
 
+import scripts_toys
 from study.book import results
 from study.learn.config import TrainConfig
 from study.learn.metrics import Interval
 from study.report import reported, verdicts
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "compare_builds.py"
-
 
 def _script():
-    spec = importlib.util.spec_from_file_location("compare_builds", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return scripts_toys.script("scripts/compare_builds.py")
 
 
 def _old_build(root: Path, value: float = 0.7) -> None:

@@ -310,14 +310,17 @@ def test_a_run_on_the_plateau_stops_after_its_plateau_allowance(ds, plateau_epoc
     assert len(tm.history) == expected and tm.best_epoch == 0
 
 
-def _stops(ds, cfg: train.TrainConfig, val_losses: list[float]) -> int | None:
-    """The epoch after which :func:`train.end_epoch` stops a run shown ``val_losses``, epoch by epoch (None: never)."""
+def _driven(ds, cfg: train.TrainConfig, val_losses: list[float]):
+    """A run shown ``val_losses`` epoch by epoch through :func:`train.end_epoch`: the run after each epoch."""
     r = train.Run(train.stack.member(ds, cfg, torch.device("cpu")))
     for epoch, loss in enumerate(val_losses):
         train.end_epoch(r, epoch, loss, 0.5)
-        if r.done:
-            return epoch
-    return None
+        yield r
+
+
+def _stops(ds, cfg: train.TrainConfig, val_losses: list[float]) -> int | None:
+    """The epoch after which :func:`train.end_epoch` stops a run shown ``val_losses`` (None: never)."""
+    return next((epoch for epoch, r in enumerate(_driven(ds, cfg, val_losses)) if r.done), None)
 
 
 def test_patience_counts_from_the_epoch_the_loss_leaves_the_plateau(ds):
@@ -348,19 +351,14 @@ def test_a_slow_starter_gets_the_plateau_allowance_to_leave_the_plateau(ds):
 
 
 def _rates(ds, cfg: train.TrainConfig, val_losses: list[float]) -> list[float]:
-    """The learning rate after each epoch of a run shown ``val_losses``, epoch by epoch (:func:`train.end_epoch`)."""
-    r = train.Run(train.stack.member(ds, cfg, torch.device("cpu")))
-    out = []
-    for epoch, loss in enumerate(val_losses):
-        train.end_epoch(r, epoch, loss, 0.5)
-        out.append(r.opt.param_groups[0]["lr"])
-    return out
+    """The learning rate after each epoch of a run shown ``val_losses`` (:func:`_driven`)."""
+    return [r.opt.param_groups[0]["lr"] for r in _driven(ds, cfg, val_losses)]
 
 
 def test_plateau_schedule_halves_the_rate_when_validation_stalls_after_leaving_the_plateau(ds):
     """The protocol comparison's XYZ seed 1 of the cold build at 9217b0c: its rate halved every 6 epochs while it
     sat on the initial plateau, to 1/256 from epoch 49, and it never left. Today the schedule waits, as patience
-    does, until the loss has left the plateau; after that a stall of ``patience // 4`` epochs halves it."""
+    does, until the loss has left the plateau; after that a stall of more than ``patience // 4`` epochs halves it."""
     cfg = dataclasses.replace(TINY, lr=1e-3, lr_schedule="plateau", patience=20, epochs=200)
     on_plateau = [0.6931] * 40
     assert _rates(ds, cfg, on_plateau) == [1e-3] * 40, "no halving while on the plateau"
@@ -673,12 +671,9 @@ def test_a_saved_model_folder_follows_the_umask(tm, tmp_path):
 
 
 def test_halving_check_ranks_points_by_the_pick_rule_on_each_histories_prefix():
-    import importlib.util
-    from pathlib import Path
+    import scripts_toys
 
-    spec = importlib.util.spec_from_file_location("halving_check", Path(__file__).parents[1] / "scripts" / "halving_check.py")
-    script = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(script)
+    script = scripts_toys.script("scripts/halving_check.py")
 
     def run(accs):  # validation loss falls whenever accuracy rises
         return [{"val_accuracy": a, "val_loss": 1.0 - a} for a in accs]

@@ -6,6 +6,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
+import scripts_toys
 
 from study.book import results, summary
 from study.chapters import usercamera
@@ -91,16 +92,11 @@ def test_the_families_are_described_from_their_records():
 
 
 def test_the_shipped_copy_is_written_from_a_paper_builds_sweep_and_refused_from_another(tmp_path):
-    import importlib.util
-    from pathlib import Path
-
     import pytest
 
     from study.runs import measured
 
-    spec = importlib.util.spec_from_file_location("shipped_measured", Path(__file__).parents[1] / "scripts" / "shipped_measured.py")
-    script = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(script)
+    script = scripts_toys.script("scripts/shipped_measured.py")
     n = usercamera.Numbers(usercamera._sweep_numbers(_sweep()))
     (tmp_path / "paper.json").write_text(results.dumps(n.entries(), preset="paper"))
     got = script.shipped(tmp_path / "paper.json", "abc1234")

@@ -36,9 +36,9 @@ frame-to-frame velocity; or what of them does not depend on the throw's heading,
 horizontal speed (``study.learn.model.Features``)."""
 Schedule = Literal["constant", "plateau", "cosine"]
 """Learning-rate schedules: fixed; halved when the validation loss, once off the initial plateau, stalls for more
-than ``patience // 4`` epochs; or a fixed
-budget of ``epochs``, a linear warm-up over ``warmup_epochs`` then a cosine decay to ``lr_floor`` of the rate
-(no early stopping: a run trains its whole budget and keeps its best validation epoch)."""
+than ``patience // 4`` epochs; or a fixed budget of ``epochs``, a linear warm-up over ``warmup_epochs`` then a
+cosine decay to ``lr_floor`` of the rate (no early stopping: a run trains its whole budget and keeps its best
+validation epoch)."""
 Average = Literal["none", "ema"]
 """Which weights are validated and kept: the optimiser's own, or their exponential moving average over steps."""
 
@@ -98,8 +98,9 @@ class TrainConfig:
     """Clip the gradient's global norm to this before each step; 0: no clipping."""
     lr_schedule: Schedule = "constant"
     """'constant'; 'plateau': halve the learning rate when the validation loss has not improved for more than a
-    quarter of ``patience`` epochs, counted once the loss has left the initial plateau (as patience is); or 'cosine': ``epochs`` epochs whatever happens (no early stopping), the rate rising
-    linearly over ``warmup_epochs`` and then falling along a half cosine to ``lr_floor`` of itself."""
+    quarter of ``patience`` epochs, counted once the loss has left the initial plateau (as patience is); or
+    'cosine': ``epochs`` epochs whatever happens (no early stopping), the rate rising linearly over
+    ``warmup_epochs`` and then falling along a half cosine to ``lr_floor`` of itself."""
     warmup_epochs: int = 0
     """With 'cosine': epochs of linear warm-up, the rate rising from ``lr / warmup_epochs`` to ``lr`` (at most
     ``epochs - 1``: a short budget warms up for less)."""

@@ -2,9 +2,9 @@
 
 Read top to bottom: :func:`fit` trains one run; :func:`train_runs` trains many runs of one shape together; below
 them, the recipe -- :func:`optimiser` (Adam and the learning-rate schedule), :func:`step` (clipping, the update,
-the weights' moving average), :func:`end_epoch` (the history, the best weights, the schedule, the stop) -- and the loop that
-calls them. ``study.learn.stack`` holds only what running many runs in one pass needs (the stacked forward pass,
-each member's data and random numbers); every cell, ``nn.LSTM`` included, trains through this loop.
+the weights' moving average), :func:`end_epoch` (the history, the best weights, the schedule, the stop) -- and the
+loop that calls them. ``study.learn.stack`` holds only what running many runs in one pass needs (the stacked
+forward pass, each member's data and random numbers); every cell, ``nn.LSTM`` included, trains through this loop.
 
 ``fit(dataset, cfg)`` trains on the dataset's train split only: a seeded permutation carves a validation split off
 it for early stopping (``study.learn.inputs``), and the test split is left to :func:`evaluate`.
@@ -168,8 +168,8 @@ class Run:
 def optimiser(params: torch.Tensor, cfg: TrainConfig) -> tuple[torch.optim.Optimizer, Any]:
     """Adam on ``params`` (one flat leaf (P,)) at ``cfg.lr``, and the schedule that reacts to the validation loss
     ('plateau': halve the rate once more than ``patience // 4`` epochs have passed without a lower loss, counted from
-    the epoch the run left the initial plateau: :func:`end_epoch`), or None (a cosine budget sets
-    each epoch's rate in :func:`_train_epoch`; 'constant' never changes it)."""
+    the epoch the run left the initial plateau: :func:`end_epoch`), or None (a cosine budget sets each epoch's rate
+    in :func:`_train_epoch`; 'constant' never changes it)."""
     opt = torch.optim.Adam([params], lr=cfg.lr, foreach=False)
     sched = (torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=0.5, patience=max(1, cfg.patience // 4))
              if cfg.lr_schedule == "plateau" else None)
