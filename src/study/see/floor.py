@@ -43,17 +43,19 @@ tracker's pixels at speed and where it sees only part of the object (a blob a qu
 pixels off at the top of a high camera's fall), and a box whose centre stands on an edge between flights (read as on
 the floor, at rest height).
 
-Where the error comes from, on the same 18 clips of seed 2000 (RMS with each clip's median removed; in brackets
-the first flight's frames): with the renderer's exact pixels and the true camera, 24 mm (34); exact pixels and the
-camera of the clicked marks, 26 mm (37); the tracker's pixels and the true camera, 44 mm (64, one oblique clip at
-183 mm); the tracker's pixels and the clicked marks' camera, 33 mm (48). So the fit itself, not the calibration,
-keeps the heights above 20 mm: even from perfect inputs its first flights are 34 mm off, and the tracker's pixels
-move which frames read as flight, so a better camera can give worse heights clip by clip (the 33 mm is not a
-stable figure). The marks' camera is off by 5-15 % in focal length on 10 of the 18 clips (six marks, a pixel of
-click noise); refining it by least squares on the marks alone fixed some clips' focal length and made the heights
-worse (42 mm), and choosing the focal length by how well the throw's arcs then fit gravity did not find the true
-one (the fit's cost is flat and jumps where the flights' frames change). Tying a first flight's heading to where
-the throw goes after its contact did not help either (33-38 mm for a spread of 0.1 to 1).
+Where the error comes from, on the same 18 clips of seed 2000 (RMS with each clip's median removed; in brackets the
+first flight's frames), measured once by hand, not by a script here: :func:`on_floor` run on each clip with the
+track's pixels swapped for the truth CSV's ``u``, ``v`` and :func:`calibrate`'s camera for
+``study.methods.sweep.camera(shot, truth)``, one at a time. With the renderer's exact pixels and the true camera,
+24 mm (34); exact pixels and the camera of the clicked marks, 26 mm (37); the tracker's pixels and the true camera,
+44 mm (64, one oblique clip at 183 mm); the tracker's pixels and the clicked marks' camera, 33 mm (48). So the fit
+itself, not the calibration, keeps the heights above 20 mm: even from perfect inputs its first flights are 34 mm
+off, and the tracker's pixels move which frames read as flight, so a better camera can give worse heights clip by
+clip (the 33 mm is not a stable figure). The marks' camera is off by 5-15 % in focal length on 10 of the 18 clips
+(six marks, a pixel of click noise); refining it by least squares on the marks alone fixed some clips' focal length
+and made the heights worse (42 mm), and choosing the focal length by how well the throw's arcs then fit gravity did
+not find the true one (the fit's cost is flat and jumps where the flights' frames change). Tying a first flight's
+heading to where the throw goes after its contact did not help either (33-38 mm for a spread of 0.1 to 1).
 """
 
 from __future__ import annotations
