@@ -185,6 +185,7 @@ def test_classify_without_a_model_and_without_a_build_says_how_to_get_one(tmp_pa
     rc = cli.main(["classify", str(csv), "--data-dir", str(tmp_path / "empty")])
     line = one_error_line(capsys)
     assert rc == 2 and "no recommended model" in line and "make book" in line and "--model DIR" in line
+    assert "--observe any-camera" in line and "$STUDY_DATA_DIR" in line  # a model fit for video, and where data is
     (tmp_path / "d").mkdir()
     (tmp_path / "d" / "recommended.json").write_text("{not json")
     rc = cli.main(["classify", str(csv), "--data-dir", str(tmp_path / "d")])
@@ -286,6 +287,9 @@ def test_classify_reports_the_missing_video_and_the_missing_size_before_the_mode
     assert "not given for the colour 'orange'" in line and "tennis ball's 0.067 m is assumed only" in line
     assert cli.main(["classify", "--manifest", str(tmp_path / "nodir" / "MANIFEST.csv"), *empty]) == 2
     assert "--manifest " in (line := one_error_line(capsys)) and "nodir/MANIFEST.csv: no such file" in line
+    (tmp_path / "bare").mkdir()  # a folder, but no MANIFEST.csv in it: still named by the option
+    assert cli.main(["classify", "--manifest", str(tmp_path / "bare"), *empty]) == 2
+    assert (line := one_error_line(capsys)).startswith("study: error: --manifest ") and "no MANIFEST.csv" in line
 
 
 def test_the_commands_help_names_the_video_path():

@@ -57,6 +57,9 @@ def test_an_answer_quotes_what_the_sweep_measured_for_its_kind_and_path_or_says_
     monkeypatch.setattr(measured, "SHIPPED", tmp_path / "none.json")
     alone = trust.for_answer("velocity-any-camera", "mean", trust.measurements(None))
     assert alone.accuracy is None and "build the book" in alone.source and "mean silhouette path" in alone.source
+    smoke = recommended.Recommended("smoke", {}, "k", {"velocity-any-camera": {"mean": IV}})
+    assert trust.measurements(smoke, answering=True).measured, "a build's own model: its own numbers"
+    assert not trust.measurements(smoke).measured, "a smoke build's numbers never weigh a model it did not make"
 
 
 def test_the_shipped_copy_reads_back_and_a_broken_one_is_named(tmp_path, monkeypatch):
@@ -144,3 +147,14 @@ def test_with_floor_marks_the_recommended_floor_model_answers_with_its_own_band_
     fallback = answer._model(None, tmp_path, floor=True)
     assert fallback.recommended_for == recommended.ONE_SCALE and "recommends none for the floor path" in fallback.which
     assert fallback.band_for(trust.FLOOR) is None, "a one-scale band says nothing of floor heights"
+
+
+def test_print_shows_an_answers_warnings_and_the_manifest_csv_keeps_them():
+    """A Python user who prints the answer sees what makes it doubtful; the command line prints those apart."""
+    from study.answer import Answer, FolderAnswer
+
+    a = Answer("v.mp4", "heavy", 0.9, 0.9, "m", "scale 1 mm/px", None, ("seed 1 failed", "exact model"),  # type: ignore[arg-type]
+               trust.Trust(IV, "test"))
+    assert str(a).endswith("  warning: seed 1 failed\n  warning: exact model") and "warning" not in a.text(False)
+    assert FolderAnswer("v.mp4", "heavy", a).row()["warnings"] == "seed 1 failed | exact model"
+    assert FolderAnswer("v.mp4", "heavy", None, "no track").row()["warnings"] == ""

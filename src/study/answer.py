@@ -91,15 +91,21 @@ class Answer:
     trust: Trust | None = None
     """How far to trust it: the accuracy the study measured for such a model through this path, and the band."""
 
-    def __str__(self) -> str:
+    def text(self, warnings: bool = True) -> str:
+        """The answer as ``print(answer)`` shows it: the label, its probability, the trust, what it assumed, and
+        (``warnings``) a line per warning (the command line prints those apart, on the error stream)."""
         trust = "" if self.trust is None else f"\n  trust: {self.trust}"
+        warned = "".join(f"\n  warning: {w}" for w in self.warnings) if warnings else ""
         return (f"{self.source}: {self.label} (p(heavy) = {self.p_heavy:.3f}; {self.model}){trust}\n"
-                f"  assumed: {self.assumed}")
+                f"  assumed: {self.assumed}{warned}")
+
+    def __str__(self) -> str:
+        return self.text()
 
 
-def shape(size: float | tuple[float, ...] = 0.067, kind: str = "ball") -> ObjectShape:
+def shape(size: float | tuple[float, ...], kind: str = "ball") -> ObjectShape:
     """The thrown object for the scale: ``kind`` 'ball' (``size``: its diameter, metres), 'box' (one edge, a cube,
-    or three) or 'cylinder' (diameter and length)."""
+    or three) or 'cylinder' (diameter and length). No size is assumed: a tennis ball's is :data:`TENNIS_BALL`."""
     sizes = (float(size),) if np.isscalar(size) else tuple(float(s) for s in size)  # type: ignore[arg-type]
     return ObjectShape("sphere" if kind == "ball" else kind, sizes)
 
@@ -148,7 +154,8 @@ def _model(model: str | Path | TrainedModel | Ensemble | None, data_dir: str | P
         ensemble = recommended.ensemble(rec, folder, path)
         which = rec.describe(path) + (" for one scale: this build recommends none for the floor path"
                                       if floor and path != recommended.FLOOR else "")
-        return _Model(ensemble, which, rec.path(path).band, measurements(rec), path, rec.path(path).name)
+        return _Model(ensemble, which, rec.path(path).band, measurements(rec, answering=True), path,
+                      rec.path(path).name)
     m = model if isinstance(model, (TrainedModel, Ensemble)) else load_model(model)
     rec = None
     with contextlib.suppress(ModelError):  # only for what its build measured of models of this kind
@@ -242,14 +249,14 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
                f"found, {len(traj.segments())} piece(s)")
     failed = [mm for mm in members if mm.failed]
     warnings = (f"{which}: {len(failed)} of {len(members)} seed(s) failed to train (on their validation throws they "
-                "could not be told from a coin), so their answers are near chance: retrain ('study train' with "
-                "another --seed) or pass another --model",) if failed else ()
+                "could not be told from a coin), so their answers are near chance: retrain with another seed ('study train "
+                "--seed N'; in Python TrainConfig(seed=N)) or give another model",) if failed else ()
     exact = exact_warning(got.kind, which, got.seen, route, got.candidate is not None)
     return Answer(str(source), trust.label(p_heavy), max(p_heavy, 1.0 - p_heavy), p_heavy, which, assumed, traj,
                   warnings + ((exact,) if exact else ()), trust)
 
 
-CSV_COLUMNS = ["file", "true", "label", "p", "p_heavy", "correct", "trust", "assumed", "error"]
+CSV_COLUMNS = ["file", "true", "label", "p", "p_heavy", "correct", "trust", "assumed", "warnings", "error"]
 """The columns of ``study classify --manifest --out``'s CSV (:meth:`FolderAnswer.row`)."""
 
 
@@ -274,12 +281,13 @@ class FolderAnswer:
         return self.answer.label == self.true
 
     def row(self) -> dict[str, object]:
-        """The CSV row: file, true, label, p, p_heavy, correct, trust, assumed, error."""
+        """The CSV row: file, true, label, p, p_heavy, correct, trust, assumed, warnings (joined by ' | '), error."""
         a = self.answer
         return {"file": self.file, "true": self.true or "", "label": a.label if a else "",
                 "p": f"{a.p:.4f}" if a else "", "p_heavy": f"{a.p_heavy:.4f}" if a else "",
                 "correct": "" if self.correct is None else str(self.correct).lower(),
-                "trust": str(a.trust) if a and a.trust else "", "assumed": a.assumed if a else "", "error": self.error}
+                "trust": str(a.trust) if a and a.trust else "", "assumed": a.assumed if a else "",
+                "warnings": " | ".join(a.warnings) if a else "", "error": self.error}
 
 
 def manifest_folder(manifest: str | Path, what: str = "manifest") -> Path:
@@ -318,7 +326,8 @@ def classify_manifest(manifest: str | Path, model: str | Path | TrainedModel | E
     from study.core.errors import StudyError
     from study.methods.videos import read_manifest
 
-    videos = read_manifest(manifest_folder(manifest, what), color=color, object_size=object_size)  # before the model
+    videos = read_manifest(manifest_folder(manifest, what), color=color, object_size=object_size,
+                           what=what)  # before the model
     marks = read_floor(floor) if isinstance(floor, (str, Path)) else floor
     got = _model(model, data_dir, marks is not None)
     out = []

@@ -498,7 +498,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                    "them use --color and --object-size); prints one line a video and how many were right")
     p.add_argument("--out", type=Path, default=None, metavar="CSV",
                    help="with --manifest: write each video's answer here too (file, true, label, p, p_heavy, "
-                   "correct, trust, assumed, error)")
+                   "correct, trust, assumed, warnings, error)")
     p.add_argument("--model", type=Path, default=None,
                    help="trained model directory (default: the model the last book build in the data folder "
                    "recommends for a camera, its seeds' mean)")
@@ -527,7 +527,7 @@ def _add_classify(sub: argparse._SubParsersAction) -> None:
                               rest_height=a.rest_height, data_dir=a.data_dir, floor=a.floor)
         for w in ans.warnings:
             _warn(w)
-        print(ans)
+        print(ans.text(warnings=False))
         return 0
 
     p.set_defaults(run=run)

@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from study import CLASSES
+from study.core import presets
 from study.learn.metrics import Interval
 from study.report.text import pct_ci
 from study.runs import recommended
@@ -80,10 +81,12 @@ class Measurements:
     """Which sweep: the data folder's build, or the shipped copy's ('' for none)."""
 
 
-def measurements(rec: recommended.Recommended | None) -> Measurements:
-    """What the sweep measured and where it comes from: the data folder's build (``rec``) if it measured it, else
-    the shipped copy; empty when neither has it."""
-    if rec is not None and rec.measured:
+def measurements(rec: recommended.Recommended | None, answering: bool = False) -> Measurements:
+    """What the sweep measured and where it comes from: the data folder's build (``rec``) if it measured it and
+    either answers itself (``answering``: its recommended model is the one answering, so its own numbers weigh it) or
+    is a paper build, else the shipped copy; empty when neither has it. A smaller build's numbers (the smoke
+    preset's models train for a few epochs) never weigh a model it did not make."""
+    if rec is not None and rec.measured and (answering or rec.preset == presets.DEFAULT):
         return Measurements(rec.measured, f"the camera sweep of the {rec.preset} build beside the recommended model")
     shipped = read_shipped()
     if shipped is not None:
@@ -122,6 +125,7 @@ def exact_warning(kind: str, which: str, seen: Measurements, path: str = paths.D
     words = _words(path)
     said = ("" if got is None else
             f"; on {seen.source}, such models labelled {pct_ci(got)} of the throws right through the {words} path")
-    instead = ("train one with --observe any-camera" if recommended else
-               "use the recommended model (no --model) or train with --observe any-camera")
+    instead = ("train one with --observe any-camera (in Python TrainConfig(observe='any-camera'))" if recommended else
+               "use the recommended model (no --model; in Python model=None) or train with --observe any-camera "
+               "(TrainConfig(observe='any-camera'))")
     return f"{which} was trained on exact trajectories, not on heights a camera gives{said}. For video, {instead}"

@@ -130,9 +130,11 @@ def read(data_dir: str | Path) -> Recommended:
     cannot be read."""
     path = Path(data_dir) / FILE
     if not path.is_file():
-        raise ModelError(f"no --model given and no recommended model in {Path(data_dir)}: build the book there "
-                         "('make book'; a book built with --data-dir DIR keeps it in DIR: pass the same --data-dir), "
-                         "or train a Z model with 'study train --dims z --out DIR' and pass --model DIR")
+        raise ModelError(f"no --model given and no recommended model in {Path(data_dir)} (the data folder: "
+                         "--data-dir, else $STUDY_DATA_DIR, else ./data of the folder you run from): the book build "
+                         "makes it ('make book' in the repository keeps it in its data/; a build with --data-dir DIR "
+                         "in DIR: pass the same --data-dir), or train a Z model fit for video with 'study train "
+                         "--data FILE --dims z --observe any-camera --out DIR' and pass --model DIR")
     try:
         body = json.loads(path.read_text())
         if body.get("format") not in FORMATS:
