@@ -350,7 +350,7 @@ def test_reusing_the_image_of_a_resting_object_leaves_the_video_unchanged(tmp_pa
     assert fast.video.read_bytes() == slow.video.read_bytes()
 
 
-def test_track_and_classify_through_a_floor_the_user_marked(rendered, tmp_path, z_model, capsys):
+def test_track_and_classify_through_a_floor_the_user_marked(rendered, tmp_path, z_model, capsys, monkeypatch):
     """A FLOOR.csv of six marks around the throw, clicked a pixel off: `study track --floor` gives the rendered
     throw's heights to centimetres at 320 x 240, and `study classify --floor` answers saying what the floor gave."""
     cam = render.scene_camera(render.class_model("light"), "side", 320, 240)
@@ -380,6 +380,18 @@ def test_track_and_classify_through_a_floor_the_user_marked(rendered, tmp_path, 
     marks.write_text("u,v,x,y\n1,2,3,4\n")
     rc = cli.main(["track", str(rendered.video), "--color", "orange", "--object-size", "0.2", "--floor", str(marks)])
     assert rc == 2 and "1 marks; give at least 4" in capsys.readouterr().err
+    far = [(u + 5000 if i == 0 else u, v) for i, (u, v) in enumerate(px)]  # one mark's pixel off the frame
+    marks.write_text("u,v,x,y\n" + "".join(f"{u:.2f},{v:.2f},{x:.3f},{y:.3f}\n" for (u, v), (x, y) in zip(far, xy)))
+
+    def not_yet(*_a, **_k):
+        raise AssertionError("tracked before the floor was checked against the frame")
+
+    monkeypatch.setattr(track, "track_video", not_yet)
+    for command in (["track", str(rendered.video)], ["classify", str(rendered.video), "--model", str(folder)]):
+        rc = cli.main([*command, "--color", "orange", "--object-size", "0.2", "--object-shape", "box", "--floor",
+                       str(marks), "--no-progress"])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and "mark 1 at pixel" in err[0] and "outside the" in err[0], err
 
 
 def test_marks_given_by_position_that_the_video_does_not_show_are_one_line_saying_none_was_found(rendered, tmp_path,

@@ -23,11 +23,12 @@ from study.report.text import Table
 from study.runs import measured, recommended
 from study.see import track
 from study.see.config import TrackConfig
-from study.see.floor import Floor, on_floor
+from study.see.floor import Floor, calibrate, on_floor
 from study.see.marks import located, needs_finding, read as read_floor
 from study.see.paths import FLOOR_KEYS
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
+from study.see.video import probe
 from study.trust import CANNOT_TELL, Measurements, Trust, exact_warning, for_answer, measurements, path_of
 
 TENNIS_BALL = ObjectShape("sphere", (0.067,))
@@ -194,6 +195,18 @@ def classify(source: str | Path, model: str | Path | TrainedModel | Ensemble | N
                    metres_per_pixel, rest_height, marks)
 
 
+def checked_floor(floor: Floor, source: str | Path) -> Floor:
+    """``floor`` with its marks found in the video ``source`` where it gives only their positions
+    (``study.see.marks.located``), and, for a video, checked against its frame size (``study.see.floor.calibrate``:
+    a mark outside the image, a camera below the floor) now, before minutes of tracking; raises the
+    :class:`ConfigError` that would otherwise come after them."""
+    found = located(floor, source)
+    if Path(source).suffix.lower() != ".csv":
+        info = probe(source)
+        calibrate(found, info.width, info.height)
+    return found
+
+
 def in_metres(traj: Trajectory, object_shape: ObjectShape | None, scale_from: str = DEFAULT,
               metres_per_pixel: float | None = None) -> tuple[Trajectory, str]:
     """``traj`` (a track in pixels, or one already in metres) with heights in metres, and what scale it assumed:
@@ -224,7 +237,7 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
     if floor is not None and needs_finding(floor) and path.suffix.lower() == ".csv":
         raise ConfigError(f"{floor.source}: positions only, and {path.name} is a track, not a video: the marks are "
                           "found in the video; classify the video, or give the marks' pixels (header u,v,x,y)")
-    floor = located(floor, path) if floor is not None else None  # a bad floor before the tracking
+    floor = checked_floor(floor, path) if floor is not None else None  # a bad floor before the tracking
     pixels = (track.read_csv(path) if path.suffix.lower() == ".csv" else
               track.track_video(path, track_config or TrackConfig()))  # pixels: scaled once, below
     rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0

@@ -320,14 +320,15 @@ def _on_floor(a: argparse.Namespace):
     from study.core.errors import ConfigError
     from study.see import track
     from study.see.floor import on_floor
-    from study.see.marks import located, read
+    from study.answer import checked_floor
+    from study.see.marks import read
 
     marks = read(a.floor)
     shape = _object_shape(a)
     if shape is None:
         raise ConfigError("--floor: give the object's size (--object-size, and --object-shape) for the height of its "
                           "centre when it lies on the floor")
-    found = located(marks, a.video)  # before the tracking
+    found = checked_floor(marks, a.video)  # before the tracking
     traj, cal = on_floor(track.track_video(a.video, _track_config(a)), found, shape.rest_height(), shape.mean_size())
     print(f"{a.video}: {cal.note()}")
     return traj
