@@ -60,6 +60,9 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
             "usercamera.sweep.size_error", "usercamera.sweep.render_cpu_s", "usercamera.sweep.kind.velocity-exact.mean",
             "usercamera.sweep.kind.velocity-randomised.exact"} <= set(names)
     assert "usercamera.sweep.all.exact.cost" not in names, "the exact path has no cost"
+    floor = n.sweep.groups["all"].paths["floor"]  # the floor camera issue's bars, each a number of the results
+    assert floor.heights_raw_mm.value == 150.0 and floor.heights_mm.value == 100.0 and floor.no_heights.value == 0
+    assert "usercamera.sweep.high.floor.heights_raw_mm" in names and "usercamera.sweep.all.exact.no_heights" not in names
     assert n.sweep.groups["low"].clips.value == 10 and n.sweep.groups["all"].clips.value == 20
     assert n.sweep.groups["480p"].clips.value == 14 and "usercamera.sweep.720p.floor.accuracy" in names, "by resolution"
     assert "most from the high cameras" in _result(cs).sweep_words, "the worst of the families, not of the resolutions"
@@ -131,6 +134,10 @@ def test_the_floor_paths_model_is_reported_through_its_path_with_its_error_model
            in said and said.endswith("more; heights 20 mm off))")
     assert "the model trained for that path (velocity, exact) labels 60.0 % [55.0, 65.0] through it (80.0 % " \
            "[75.0, 85.0] from exact heights" in r.floor_marks_words
+    fm = r.numbers.sweep.floor_model  # the same figures stored, for the summary and the bars
+    assert (fm.floor.value, fm.exact.value, fm.known.value) == (0.6, 0.8, 0.75) and fm.known_minus_floor.value == 0.6
+    assert usercamera.Numbers.read(dict(r.numbers.entries())).sweep.floor_model == fm
+    assert usercamera.Numbers(usercamera._sweep_numbers(_sweep())).sweep.floor_model is None, "no floor model: absent"
     words = r.floor_model_words
     assert words.startswith("fitted on the floor path on 18 development clips: a per-throw offset of 9 mm and 68 mm")
     assert "which it does not hold: the path's error is 0.26 correlated 10 frames on, the model's 0.66" in words

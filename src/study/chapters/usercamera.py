@@ -25,7 +25,7 @@ from study.methods.floor_model import FloorFit
 from study.methods.recommend import Recommendation, kind, recommend
 from study.report.reported import count, number
 from study.report.text import Table, pct, pct_ci, points
-from study.report.usercamera import Numbers, Sweep, SweepGroup, SweepKey, SweepPath
+from study.report.usercamera import FloorModel, Numbers, Sweep, SweepGroup, SweepKey, SweepPath
 from study.see import marklayout, paths
 from study.simulate import measure
 from study.simulate.observe import CAMERA_FAMILIES
@@ -117,7 +117,10 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
             None if math.isnan(r.rms_centred_mm) else
             number(r.rms_centred_mm, f"camera sweep ({g}): height error after each clip's median, {k}", unit="mm"),
             None if r.cost is None else number(r.cost, f"camera sweep ({g}): exact heights' accuracy minus {k}'s",
-                                               signed=True))
+                                               signed=True),
+            None if math.isnan(r.rms_mm) else
+            number(r.rms_mm, f"camera sweep ({g}): height error as it is, {k}", unit="mm"),
+            None if r.cost is None else count(r.no_heights, f"camera sweep ({g}): clips without heights, {k}"))
             for k, r in rows.items()}
         groups[g] = SweepGroup(count(cs.clips_in(g), f"camera sweep ({g}): clips"),
                                number(1000 * cs.floors[g].true_rows if g in cs.floors else math.nan,
@@ -130,7 +133,22 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
              for name, m in cs.measured.items()}
     return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]
                  number(cpu, "camera sweep: CPU seconds to render the clips", unit="s") if timed == len(cs.clips)
-                 else None, kinds)
+                 else None, _floor_model_numbers(cs), kinds)
+
+
+def _floor_model_numbers(cs: CameraSweep) -> FloorModel | None:
+    """The floor path's own model on the whole sweep: through the floor path, exact, the known camera, and the
+    known camera's paired gain over the floor path (None: the build trained no model for the floor path)."""
+    if cs.floor_choice is None:
+        return None
+    m = cs.measured[cs.floor_choice]
+    r, floor, known = m.results["all"], camera_cost.FLOOR_PATH, camera_cost.KNOWN
+    what = f"camera sweep: the floor path's model ({cs.floor_choice})"
+    return FloorModel(number(r[floor].accuracy, f"{what}, through the floor path"),
+                      number(r["exact"].accuracy, f"{what}, exact heights"),
+                      number(r[known].accuracy, f"{what}, through the known camera") if known in r else None,
+                      number(m.difference(known, floor), f"{what}: known camera minus floor path, paired",
+                             signed=True) if known in r else None)
 
 
 def _sweep_table(cs: CameraSweep) -> Table:

@@ -31,6 +31,10 @@ class SweepPath(Reported):
     path turned no clip into heights)."""
     cost: Number | None = None
     """The exact heights' accuracy minus this path's, paired over clips and seeds, points (None: exact)."""
+    heights_raw_mm: Number | None = None
+    """Root-mean-square height error as it is, no median removed, millimetres (None: no clip turned into heights)."""
+    no_heights: Number | None = None
+    """Clips the path turned into no heights (each a miss in :attr:`accuracy`; None: exact)."""
 
 
 @dataclass(frozen=True)
@@ -46,6 +50,20 @@ class SweepGroup(Reported):
 
 
 @dataclass(frozen=True)
+class FloorModel(Reported):
+    """The model recommended for the floor path (``--floor``), on the whole sweep: the floor camera issue's bars."""
+
+    floor: Number
+    """Its accuracy through the floor path, over the clips and its seeds (a clip without heights is a miss)."""
+    exact: Number
+    """Its accuracy on the same clips' exact heights."""
+    known: Number | None = None
+    """Its accuracy through the known camera at each frame's true depth (the path's limit; None: not measured)."""
+    known_minus_floor: Number | None = None
+    """The known camera's accuracy minus the floor path's, paired over clips and seeds, points."""
+
+
+@dataclass(frozen=True)
 class Sweep(Reported):
     """What a camera nobody measured leaves of the heights and of the answer (the camera sweep)."""
 
@@ -58,6 +76,8 @@ class Sweep(Reported):
     """Median relative error of one frame's blob diameter against the object's true apparent size."""
     render_cpu_s: Number | None = None
     """CPU seconds the clips took to render, as recorded when they were made (None: not recorded)."""
+    floor_model: FloorModel | None = None
+    """The model recommended for the floor path (None: the build trained none)."""
     kinds: dict[str, dict[SweepKey, Number]] = named("kind", default_factory=dict)
     """Every candidate, by its kind (``study.runs.measured.kind``): its accuracy on exact heights and by each path,
     over the clips that path turned into heights (what an answer quotes for a model of that kind: an answer exists
