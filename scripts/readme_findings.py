@@ -20,6 +20,8 @@ from study.report.reported import Number
 
 BEGIN = "<!-- findings: begin -->"
 END = "<!-- findings: end -->"
+RECIPE_KIND = "positions-any-camera"
+"""The kind of model the README's own-trajectories recipe trains for video (``study.runs.measured.kind``)."""
 
 
 def _pct(n: Number | None) -> str:
@@ -59,6 +61,11 @@ def block(path: Path, commit: str) -> str:
     if sweep is not None and exact is not None:
         rows.append(("80 clips from cameras nobody measured (recommended model; exact heights → a user's path)", "—",
                      f"{_pct(exact)} → {_pct(sweep)}", ""))
+    recipe = [num(f"usercamera.sweep.kind.{RECIPE_KIND}.{path}") for path in ("exact", "mean", "floor")]
+    if recipe[0] is not None and recipe[1] is not None:
+        rows.append(("the same clips, a model like the recipe's below (`observe=\"any-camera\"`; exact heights → one "
+                     "scale → floor marks, over the clips each path gave heights for)", "—",
+                     " → ".join(_pct(n) for n in recipe), ""))
     table = ["| | the paper | ours [95 % CI] | verdict |", "|---|---|---|---|"]
     table += [f"| {a} | {b} | {c} | {d} |" for a, b, c, d in rows]
     return "\n".join([BEGIN, f"**What the study found** (the `{page.preset}` preset's build of commit `{commit}`; "
