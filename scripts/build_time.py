@@ -2,8 +2,9 @@
 sweep's rendering CPU, and the least wall time that much work needs on the build's cores when nothing is cached.
 
 Reads a build's ``_build/executed/timings.json`` (written by ``study book``) and, beside it, the build's
-``_build/results.json`` for the sweep's rendering time (``usercamera.sweep.render_cpu_s``: the build's own clips, as
-recorded when they were rendered; a data folder keeps older builds' sweeps too)::
+``_build/results.json`` for the renders' CPU time (:data:`RENDERS`: the camera sweep's clips and the floor path's
+development clips, the build's own, as recorded when they were rendered; a data folder keeps older builds' clips
+too)::
 
     .venv/bin/python scripts/build_time.py _build/executed/timings.json --cores 2
 
@@ -23,19 +24,18 @@ from pathlib import Path
 
 from study.book import results
 from study.core.errors import DataError
-
-RENDER = "usercamera.sweep.render_cpu_s"
-"""The results' name for the CPU seconds the camera sweep's clips took to render."""
+from study.report.usercamera import RENDERS
 
 
-def sweep_render_cpu(path: Path) -> float | None:
-    """CPU seconds the camera sweep of the build whose results file is ``path`` took to render (:data:`RENDER`), or
-    None if it has no such number; ``study.core.errors.DataError`` naming the file if it cannot be read."""
-    leaf = results.load(path).get(RENDER)
-    return None if leaf is None else float(leaf.value)
+
+def sweep_render_cpu(path: Path) -> dict[str, float]:
+    """CPU seconds each of :data:`RENDERS` took to render in the build whose results file is ``path`` (those it has;
+    empty if none); ``study.core.errors.DataError`` naming the file if it cannot be read."""
+    got = results.load(path)
+    return {what: float(got[name].value) for what, name in RENDERS.items() if name in got}
 
 
-def report(timings: dict, render_s: float | None, cores: int) -> list[str]:
+def report(timings: dict, renders: dict[str, float] | None, cores: int) -> list[str]:
     """The lines :func:`main` prints."""
     lines = [f"wall {timings['wall_seconds'] / 60:.1f} min, the builder's own process "
              f"{timings['cpu_seconds'] / 60:.1f} CPU-min (preset {timings['preset']}, device {timings['device']})"]
@@ -49,12 +49,12 @@ def report(timings: dict, render_s: float | None, cores: int) -> list[str]:
     lines.append(f"training: {int(runs['models'])} models, {int(runs['epochs'])} epochs, "
                  f"{runs['cpu_seconds'] / 60:.1f} CPU-min; by chapter: " + ", ".join(
                      f"{k} {v['cpu_seconds'] / 60:.1f}" for k, v in timings["runs_by_chapter"].items()))
-    work = runs["cpu_seconds"] + (render_s or 0.0)
-    if render_s is None:
+    work = runs["cpu_seconds"] + sum((renders or {}).values())
+    if not renders:
         lines.append("sweep renders: not in the results (no camera sweep, or no results file beside)")
     else:
-        lines.append(f"sweep renders: {render_s / 60:.1f} CPU-min")
-    lines.append(f"training and sweep renders: {work / 60:.1f} CPU-min: a cold build needs at least "
+        lines.append("renders: " + ", ".join(f"{what} {s / 60:.1f} CPU-min" for what, s in renders.items()))
+    lines.append(f"training and renders: {work / 60:.1f} CPU-min: a cold build needs at least "
                  f"{math.floor(work / 60 / cores)} min of wall on {cores} cores for them alone")
     failed = timings.get("failed_runs", [])
     reasons = Counter(r.get("reason", "no reason given").split(":")[0] for r in failed)
@@ -74,12 +74,12 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     beside = a.results or a.timings.parent.parent / "results.json"
     try:
-        render_s = sweep_render_cpu(beside) if a.results or beside.is_file() else None
+        renders = sweep_render_cpu(beside) if a.results or beside.is_file() else None
     except DataError as e:
         print(f"build_time: {e}", file=sys.stderr)
         return 2
     try:
-        lines = report(json.loads(a.timings.read_text()), render_s, a.cores)
+        lines = report(json.loads(a.timings.read_text()), renders, a.cores)
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
         print(f"build_time: {a.timings}: cannot read it as a build's timings ({type(e).__name__}: {e}); pass the "
               "_build/executed/timings.json of a 'study book' build", file=sys.stderr)

@@ -417,6 +417,8 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
     timings = json.loads((tmp_path / "_build" / "executed" / "timings.json").read_text())
     assert len(timings["stages"]) >= 2, "a cold build plans its runs in stages: the grid, then what its winner needs"
     assert all(s["runs"] > 0 and s["chapters"] for s in timings["stages"])
+    renders = timings["render_cpu_seconds"]  # the sweep's and the floor path's clips, rendered by this build
+    assert set(renders) == {"sweep", "floor development clips"} and all(v > 0 for v in renders.values()), renders
     records = sorted((tmp_path / "data" / "runs").glob("*.json"))
     again = book.execute(tmp_path, "smoke", only=["table1", "decision"])  # every run they ask for is trained
     assert not json.loads((tmp_path / "_build" / "executed" / "timings.json").read_text())["stages"]

@@ -31,17 +31,18 @@ TIMINGS = {"preset": "paper", "device": "cpu", "wall_seconds": 600.0, "cpu_secon
 def _build(tmp_path: Path) -> Path:
     (tmp_path / "_build" / "executed").mkdir(parents=True)
     (tmp_path / "_build" / "executed" / "timings.json").write_text(json.dumps(TIMINGS))
-    render = reported.number(600.0, "camera sweep: CPU seconds to render the clips", unit="s")
-    (tmp_path / "_build" / "results.json").write_text(
-        results.dumps([("usercamera.sweep.render_cpu_s", render)], preset="paper"))
+    render = reported.number(480.0, "camera sweep: CPU seconds to render the clips", unit="s")
+    dev = reported.number(120.0, "the floor path's development clips: CPU seconds to render", unit="s")
+    (tmp_path / "_build" / "results.json").write_text(results.dumps(
+        [("usercamera.sweep.render_cpu_s", render), ("usercamera.sweep.floor_render_cpu_s", dev)], preset="paper"))
     return tmp_path / "_build" / "executed" / "timings.json"
 
 
 def test_the_sweep_renders_and_the_runs_bound_a_cold_builds_wall_time(tmp_path, capsys):
     assert _script().main([str(_build(tmp_path)), "--cores", "2"]) == 0
     out = capsys.readouterr().out
-    assert "sweep renders: 10.0 CPU-min" in out
-    assert "training and sweep renders: 30.0 CPU-min: a cold build needs at least 15 min of wall on 2 cores" in out
+    assert "renders: sweep 8.0 CPU-min, floor development clips 2.0 CPU-min" in out
+    assert "training and renders: 30.0 CPU-min: a cold build needs at least 15 min of wall on 2 cores" in out
     assert "table1 2.0 (+1.0)" in out and "api" not in out, "cached pages are not listed"
     assert "waits for runs: 1, 5.0 min in all" in out
     assert "failed runs: 2\n  2 x truncated back-propagation\n" in out

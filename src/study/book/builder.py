@@ -523,14 +523,29 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         for ch, base, parameters, seconds in done:
             _write_key(ch, base, parameters, root, seconds)
         if timings:
+            results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
             record = {"preset": preset, "device": device, "wall_seconds": round(time.perf_counter() - started, 3),
                       "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages, "steps": steps,
+                      "render_cpu_seconds": _renders(root / results.FILE),
                       "runs": plan_totals(root),
                       "runs_by_chapter": cluster.plan_by_part([ch.plan_part for ch in chapters(root)]),
                       **cluster.plan_listed([ch.plan_part for ch in chapters(root)])}
             write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
-            results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
     return timings
+
+
+def _renders(path: Path) -> dict[str, float]:
+    """CPU seconds each of the chapters' renders took (``study.report.usercamera.RENDERS``), as the results file at
+    ``path`` holds them, by what was rendered (those it has: the clips are rendered once, so a resumed build's last
+    process still reports them)."""
+    from study.core.errors import StudyError
+    from study.report.usercamera import RENDERS
+
+    try:
+        got = results.load(path) if path.is_file() else {}
+    except StudyError:  # a record only: the results' own check reports a bad file where it is read for the book
+        return {}
+    return {what: float(got[name].value) for what, name in RENDERS.items() if name in got}
 
 
 RECOMMENDING = {"realworld", "usercamera"}

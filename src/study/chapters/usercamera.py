@@ -66,6 +66,8 @@ class CameraSweep:
     """The candidate recommended for the floor path (None: the floor path had no error model to train one for)."""
     floor_fit: FloorFit | None = None
     """The floor path's error model and its check (``study.methods.floor_model``; None: it could not be fitted)."""
+    floor_render_s: tuple[float, float, int] = (0.0, 0.0, 0)
+    """The same as :attr:`render_s` for the floor path's development clips (``floor_model.development_clips``)."""
 
     @property
     def recommended(self) -> camera_cost.Measured:
@@ -101,12 +103,17 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
     ds = runner.dataset
     f_train = measure.fall_acceleration(ds.train.x[:, : round(n * ds.fps / fps), 2], ds.fps, contact)
     drag = camera_cost.drag_rule(f_train, ds.train.y, clips, read(first)[0], fps, contact)
-    times = sweep.render_times(clips)
-    cpu, wall = (sum(t[k] for t in times.values()) for k in ("cpu_s", "wall_s"))
     kinds = {name: kind(name) for name in rec.models}
+    fit = floor_model.fitted(runner, progress)  # renders the development clips where they are not yet
     return CameraSweep(tuple(clips), measured, rec.choice, kinds, camera_cost.floors(clips, tracked), drag,
-                       camera_cost.size_error(clips, tracked, shape), (cpu, wall, len(times)), rec.floor_choice,
-                       floor_model.fitted(runner, progress))
+                       camera_cost.size_error(clips, tracked, shape), _render_s(clips), rec.floor_choice, fit,
+                       _render_s(floor_model.development_clips(runner)))
+
+
+def _render_s(clips: list[sweep.Clip]) -> tuple[float, float, int]:
+    """CPU and wall seconds ``clips`` took to render, as recorded when each was made, and how many were recorded."""
+    times = sweep.render_times(clips)
+    return (sum(t["cpu_s"] for t in times.values()), sum(t["wall_s"] for t in times.values()), len(times))
 
 
 def _sweep_numbers(cs: CameraSweep) -> Sweep:
@@ -127,13 +134,16 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
                                       f"camera sweep ({g}): least one-scale height error", unit="mm"), by_path)
     drag = {PATH_KEYS[k]: number(iv, f"camera sweep: drag rule's accuracy, heights {k}") for k, iv in cs.drag.items()}
     cpu, _, timed = cs.render_s
+    dev_cpu, _, dev_timed = cs.floor_render_s
     kinds = {cs.kinds[name]: {PATH_KEYS[k]: number(r.answered, f"camera sweep: {name}'s accuracy on the clips "
                                                    f"that gave heights {k}", no_heights=r.no_heights)
                               for k, r in m.results["all"].items() if r.answered is not None}
              for name, m in cs.measured.items()}
     return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]
                  number(cpu, "camera sweep: CPU seconds to render the clips", unit="s") if timed == len(cs.clips)
-                 else None, _floor_model_numbers(cs), kinds)
+                 else None, _floor_model_numbers(cs), kinds,
+                 number(dev_cpu, "the floor path's development clips: CPU seconds to render", unit="s")
+                 if dev_timed else None)
 
 
 def _floor_model_numbers(cs: CameraSweep) -> FloorModel | None:

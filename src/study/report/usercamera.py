@@ -20,6 +20,11 @@ Family = Literal[("all", *(f.key for f in CAMERA_FAMILIES))]  # type: ignore[val
 """The camera sweep's clips pooled, or one camera family (``study.simulate.observe.CAMERA_FAMILIES``)."""
 
 
+RENDERS = {"sweep": "usercamera.sweep.render_cpu_s", "floor development clips": "usercamera.sweep.floor_render_cpu_s"}
+"""What the chapter rendered -> the results' name for the CPU seconds it took (the build's ``timings.json`` and
+``scripts/build_time.py`` read them)."""
+
+
 @dataclass(frozen=True)
 class SweepPath(Reported):
     """One path on a group of the camera sweep's clips, read by the recommended model."""
@@ -82,6 +87,9 @@ class Sweep(Reported):
     """Every candidate, by its kind (``study.runs.measured.kind``): its accuracy on exact heights and by each path,
     over the clips that path turned into heights (what an answer quotes for a model of that kind: an answer exists
     only where its path gave heights; each number's source says how many clips gave none)."""
+    floor_render_cpu_s: Number | None = None
+    """CPU seconds the floor path's development clips took to render, as recorded when they were made (None: not
+    recorded)."""
 
 
 @dataclass(frozen=True)
