@@ -4,6 +4,8 @@ path (study.see.ground) cannot follow. Inline scenes: the camera and the throw a
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -226,3 +228,21 @@ def test_on_floor_reads_the_blobs_diameter_given_the_objects_size_and_ignores_di
         np.testing.assert_array_equal(got.z, plain.z)
     with pytest.raises(ConfigError, match="size"):
         floor.on_floor(_track(cam, t, uv, np.full(len(t), 30.0)), f, REST, 0.0)
+
+
+def test_an_unreadable_floor_file_and_a_floor_that_cannot_fix_the_focal_length_are_said(tmp_path):
+    """Bytes that are not text are one error naming the file; a camera square above the floor sees no perspective,
+    so the marks cannot fix its focal length: the answer says the 60 degrees it took."""
+    from study.see.camera import Camera
+
+    f = tmp_path / "FLOOR.csv"
+    f.write_bytes(b"\xff\xfe\x00u,v\x80\x81")
+    with pytest.raises(DataError, match="FLOOR.csv: cannot be read .*write it as a plain CSV"):
+        floor.read_floor(f)
+    down = Camera((0.0, 0.0, 3.0), (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0), 500.0, 640, 480)  # looks down -z
+    marks_ = floor.seen(down, RECTANGLE[:6])
+    assert len(marks_.points) == 6
+    cal = floor.calibrate(marks_, 640, 480)
+    assert cal.assumed_fov and "60° taken" in cal.note() and "the marks cannot fix the focal length" in cal.note()
+    fov = 2 * math.degrees(math.atan(0.5 * 480 / cal.camera.focal))
+    assert fov == pytest.approx(60.0), "the assumed field of view is the one the note gives"
