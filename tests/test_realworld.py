@@ -366,6 +366,10 @@ def test_the_floor_models_labels_through_floor_marks_read_back_and_show_as_count
                                     "floor": ("recommended for floor marks (heights, floor)", RENDERED, REAL)},
                            floor={"floor": RENDERED[:3]})
     assert "realworld.floor.floor.light" in {name for name, _ in n.entries()}
+    right = {c: sum(r.correct for r in ls if r.label == c) for c, ls in (("light", RENDERED[:3]), ("heavy", RENDERED))}
+    gap = n.floor_minus_known["floor"]  # against the same model's labels by the renderer's camera
+    assert gap["light"].value == right["light"] - sum(r.correct for r in RENDERED if r.label == "light")
+    assert set(gap) == {c for c in ("light", "heavy") if any(r.label == c for r in RENDERED[:3])}
     f = tmp_path / "results.json"
     f.write_text(results.dumps(n.entries()))
     assert realworld.Numbers.read(results.load(f)) == n

@@ -73,7 +73,7 @@ from study.report.realworld import (
     Numbers,
     Training,
 )
-from study.report.reported import Number, Verdict, number
+from study.report.reported import Number, Verdict, count, number
 from study.report.text import Table, pct, pct_ci
 from study.runs import paper
 from study.see import render, track, video
@@ -440,10 +440,17 @@ def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Lab
                       for c, iv in per_class_interval(ls).items() if iv is not None}
                 for key, ls in (got or {}).items()}
 
+    def right(ls: Sequence[Label], c: str) -> int:
+        return sum(r.correct for r in ls if r.label == c)
+
+    gap = {key: {c: count(right(ls, c) - right(labels[key][1], c),  # type: ignore[misc]
+                          f"rendered {c} videos right through floor marks minus through the renderer's camera, "
+                          f"{labels[key][0]}") for c in CLASSES if any(r.label == c for r in ls)}
+           for key, ls in (floor or {}).items()}
     return Numbers(_candidates(rec), judged["figure1"], judged["figure5"], judged["figure6"],
                    {key: _classified(name, rendered, real, objects) for key, (name, rendered, real) in labels.items()},
                    per_class(user, "on a user's path"), per_class(exact, "from their exact heights"),
-                   per_class(floor, "through floor marks"))
+                   per_class(floor, "through floor marks"), gap)
 
 
 def _candidates(rec: Recommendation) -> dict[Inputs, dict[Training, Candidate]]:

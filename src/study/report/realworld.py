@@ -71,3 +71,6 @@ class Numbers(Reported):
     floor: dict[ModelKey, dict[Class, Number]] = named("floor", default_factory=dict)
     """Each model's labels of the rendered videos through floor marks clicked a pixel off (``study classify
     --floor``): ``realworld.floor.floor.light`` and so on."""
+    floor_minus_known: dict[ModelKey, dict[Class, Number]] = named("floor_minus_known", default_factory=dict)
+    """Each model's rendered videos right through floor marks minus right through the renderer's camera, per class,
+    a count (the floor camera issue asks for at most 2 either way): ``realworld.floor_minus_known.floor.light``."""
