@@ -56,6 +56,19 @@ clip (the 33 mm is not a stable figure). The marks' camera is off by 5-15 % in f
 and made the heights worse (42 mm), and choosing the focal length by how well the throw's arcs then fit gravity did
 not find the true one (the fit's cost is flat and jumps where the flights' frames change). Tying a first flight's
 heading to where the throw goes after its contact did not help either (33-38 mm for a spread of 0.1 to 1).
+
+A closer look per frame (exact pixels, the true camera) corrects that split: the frames "before the first contact"
+counted there run until the object first lies flat, so they hold the tumble after the first landing, and that is
+where the error is. A flight's own frames are within about a centimetre. Two leads, measured on a few clips only:
+- **The contact prior is centred too low for a box.** A cube of half-edge a that lands in a random orientation has
+  its centre 1.5 a up on average (a face: a; an edge: 1.41 a; a corner: 1.73 a), not at ``rest_height`` = a. So each
+  contact is placed too far along its ray, and every arc after it too low: -25 to -44 mm on two bouncing clips
+  (low_009, square-on_000 of seed 2000). Centring the prior at 1.5 a (spread 0.25 a) brought those to 0 to -22 mm. On the tracked pixels, one clip's
+  fit then ran for minutes, so the pooled figure was not measured.
+- **A box rocking on its edges is read as lying flat.** Its centre is 60-120 mm up for half a second while its ray
+  meets the rest plane up to a metre behind it. Taking the near envelope of each ground run's distance along the
+  ray (a morphological opening, 0.4 s) halved that error on one clip, but the short hops between rocks stay
+  misread.
 """
 
 from __future__ import annotations
