@@ -1,5 +1,5 @@
-"""Where a paper build's time went: its wall time, each chapter's, the runs' training CPU by chapter, the camera
-sweep's rendering CPU, and the least wall time that much work needs on the build's cores when nothing is cached.
+"""Where a paper build's time went: its wall time, each chapter's, the runs' training CPU by chapter, the renders'
+CPU (the camera sweep's and the floor path's development clips), and the least wall time that much work needs on the build's cores when nothing is cached.
 
 Reads a build's ``_build/executed/timings.json`` (written by ``study book``) and, beside it, the build's
 ``_build/results.json`` for the renders' CPU time (:data:`RENDERS`: the camera sweep's clips and the floor path's

@@ -63,8 +63,10 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     assert "usercamera.sweep.floor_render_cpu_s" not in names, "the development clips' renders: not recorded here"
     import dataclasses
 
-    timed = usercamera._sweep_numbers(dataclasses.replace(cs, floor_render_s=(60.0, 30.0, 5)))
+    timed = usercamera._sweep_numbers(dataclasses.replace(cs, floor_render_s=(60.0, 30.0, 5), floor_clips=5))
     assert timed.floor_render_cpu_s.value == 60.0
+    partial = usercamera._sweep_numbers(dataclasses.replace(cs, floor_render_s=(60.0, 30.0, 4), floor_clips=5))
+    assert partial.floor_render_cpu_s is None, "4 of 5 clips timed: a partial sum would understate the renders"
     floor = n.sweep.groups["all"].paths["floor"]  # the floor camera issue's bars, each a number of the results
     assert floor.heights_raw_mm.value == 150.0 and floor.heights_mm.value == 100.0 and floor.no_heights.value == 0
     assert "usercamera.sweep.high.floor.heights_raw_mm" in names and "usercamera.sweep.all.exact.no_heights" not in names

@@ -523,14 +523,16 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         for ch, base, parameters, seconds in done:
             _write_key(ch, base, parameters, root, seconds)
         if timings:
-            results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
             record = {"preset": preset, "device": device, "wall_seconds": round(time.perf_counter() - started, 3),
                       "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages, "steps": steps,
-                      "render_cpu_seconds": _renders(root / results.FILE),
                       "runs": plan_totals(root),
                       "runs_by_chapter": cluster.plan_by_part([ch.plan_part for ch in chapters(root)]),
                       **cluster.plan_listed([ch.plan_part for ch in chapters(root)])}
-            write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
+            try:
+                results.merge([ch.results_part for ch in chs], root / results.FILE, preset)
+            finally:  # the timings are written even where the results cannot be merged
+                record["render_cpu_seconds"] = _renders(root / results.FILE)
+                write_text_atomic(root / EXECUTED / "timings.json", json.dumps(record, indent=1) + "\n")
     return timings
 
 

@@ -445,7 +445,7 @@ def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Lab
 
     gap = {key: {c: count(right(ls, c) - right(labels[key][1], c),  # type: ignore[misc]
                           f"rendered {c} videos right through floor marks minus through the renderer's camera, "
-                          f"{labels[key][0]}") for c in CLASSES if any(r.label == c for r in ls)}
+                          f"{labels[key][0]}", signed=True) for c in CLASSES if any(r.label == c for r in ls)}
            for key, ls in (floor or {}).items()}
     return Numbers(_candidates(rec), judged["figure1"], judged["figure5"], judged["figure6"],
                    {key: _classified(name, rendered, real, objects) for key, (name, rendered, real) in labels.items()},

@@ -68,6 +68,8 @@ class CameraSweep:
     """The floor path's error model and its check (``study.methods.floor_model``; None: it could not be fitted)."""
     floor_render_s: tuple[float, float, int] = (0.0, 0.0, 0)
     """The same as :attr:`render_s` for the floor path's development clips (``floor_model.development_clips``)."""
+    floor_clips: int = 0
+    """How many development clips the floor path has (their render time is reported only if each one's was kept)."""
 
     @property
     def recommended(self) -> camera_cost.Measured:
@@ -105,9 +107,15 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
     drag = camera_cost.drag_rule(f_train, ds.train.y, clips, read(first)[0], fps, contact)
     kinds = {name: kind(name) for name in rec.models}
     fit = floor_model.fitted(runner, progress)  # renders the development clips where they are not yet
+    dev = floor_model.development_clips(runner)
     return CameraSweep(tuple(clips), measured, rec.choice, kinds, camera_cost.floors(clips, tracked), drag,
                        camera_cost.size_error(clips, tracked, shape), _render_s(clips), rec.floor_choice, fit,
-                       _render_s(floor_model.development_clips(runner)))
+                       _render_s(dev), len(dev))
+
+
+def _all_timed(render_s: tuple[float, float, int], n: int) -> bool:
+    """Whether every one of ``n`` clips had its render time recorded (a partial sum would understate it)."""
+    return render_s[2] == n > 0
 
 
 def _render_s(clips: list[sweep.Clip]) -> tuple[float, float, int]:
@@ -134,7 +142,6 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
                                       f"camera sweep ({g}): least one-scale height error", unit="mm"), by_path)
     drag = {PATH_KEYS[k]: number(iv, f"camera sweep: drag rule's accuracy, heights {k}") for k, iv in cs.drag.items()}
     cpu, _, timed = cs.render_s
-    dev_cpu, _, dev_timed = cs.floor_render_s
     kinds = {cs.kinds[name]: {PATH_KEYS[k]: number(r.answered, f"camera sweep: {name}'s accuracy on the clips "
                                                    f"that gave heights {k}", no_heights=r.no_heights)
                               for k, r in m.results["all"].items() if r.answered is not None}
@@ -142,8 +149,8 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
     return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]
                  number(cpu, "camera sweep: CPU seconds to render the clips", unit="s") if timed == len(cs.clips)
                  else None, _floor_model_numbers(cs), kinds,
-                 number(dev_cpu, "the floor path's development clips: CPU seconds to render", unit="s")
-                 if dev_timed else None)
+                 number(cs.floor_render_s[0], "the floor path's development clips: CPU seconds to render", unit="s")
+                 if _all_timed(cs.floor_render_s, cs.floor_clips) else None)
 
 
 def _floor_model_numbers(cs: CameraSweep) -> FloorModel | None:
