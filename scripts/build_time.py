@@ -1,10 +1,11 @@
 """Where a paper build's time went: its wall time, each chapter's, the runs' training CPU by chapter, the renders'
-CPU (the camera sweep's and the floor path's development clips), and the least wall time that much work needs on the build's cores when nothing is cached.
+CPU (the camera sweep's and the floor path's development clips), and the least wall time that much work needs on
+the build's cores when nothing is cached.
 
 Reads a build's ``_build/executed/timings.json`` (written by ``study book``) and, beside it, the build's
-``_build/results.json`` for the renders' CPU time (:data:`RENDERS`: the camera sweep's clips and the floor path's
-development clips, the build's own, as recorded when they were rendered; a data folder keeps older builds' clips
-too)::
+``_build/results.json`` for the renders' CPU time (``study.report.usercamera.render_cpu``: the camera sweep's clips
+and the floor path's development clips, the build's own, as recorded when they were rendered; a data folder keeps
+older builds' clips too)::
 
     .venv/bin/python scripts/build_time.py _build/executed/timings.json --cores 2
 
@@ -24,15 +25,13 @@ from pathlib import Path
 
 from study.book import results
 from study.core.errors import DataError
-from study.report.usercamera import RENDERS
-
+from study.report.usercamera import render_cpu
 
 
 def sweep_render_cpu(path: Path) -> dict[str, float]:
-    """CPU seconds each of :data:`RENDERS` took to render in the build whose results file is ``path`` (those it has;
-    empty if none); ``study.core.errors.DataError`` naming the file if it cannot be read."""
-    got = results.load(path)
-    return {what: float(got[name].value) for what, name in RENDERS.items() if name in got}
+    """CPU seconds each render took in the build whose results file is ``path``
+    (``study.report.usercamera.render_cpu``); ``study.core.errors.DataError`` naming the file if it cannot be read."""
+    return render_cpu(results.load(path))
 
 
 def report(timings: dict, renders: dict[str, float] | None, cores: int) -> list[str]:

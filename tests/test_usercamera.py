@@ -3,9 +3,11 @@ and its sentences follow them; made-up sweeps, no rendering."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 import scripts_toys
 
 from study.book import results, summary
@@ -63,10 +65,16 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     assert "usercamera.sweep.floor_render_cpu_s" not in names, "the development clips' renders: not recorded here"
     import dataclasses
 
-    timed = usercamera._sweep_numbers(dataclasses.replace(cs, floor_render_s=(60.0, 30.0, 5), floor_clips=5))
+    timed = usercamera._sweep_numbers(dataclasses.replace(cs, floor_render_cpu=60.0))
     assert timed.floor_render_cpu_s.value == 60.0
-    partial = usercamera._sweep_numbers(dataclasses.replace(cs, floor_render_s=(60.0, 30.0, 4), floor_clips=5))
-    assert partial.floor_render_cpu_s is None, "4 of 5 clips timed: a partial sum would understate the renders"
+    clips = [SimpleNamespace(video=SimpleNamespace(path=Path(f"c{i}.mp4"))) for i in range(5)]
+    kept = {f"c{i}.mp4": {"cpu_s": 12.0, "wall_s": 6.0} for i in range(5)}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(usercamera.sweep, "render_times", lambda cs: {c.video.path.name: kept[c.video.path.name]
+                                                                  for c in cs if c.video.path.name in kept})
+        assert usercamera._render_cpu(clips) == 60.0
+        del kept["c4.mp4"]
+        assert usercamera._render_cpu(clips) is None, "4 of 5 clips timed: a partial sum would understate the renders"
     floor = n.sweep.groups["all"].paths["floor"]  # the floor camera issue's bars, each a number of the results
     assert floor.heights_raw_mm.value == 150.0 and floor.heights_mm.value == 100.0 and floor.no_heights.value == 0
     assert "usercamera.sweep.high.floor.heights_raw_mm" in names and "usercamera.sweep.all.exact.no_heights" not in names

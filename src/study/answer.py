@@ -262,8 +262,8 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
                f"found, {len(traj.segments())} piece(s)")
     failed = [mm for mm in members if mm.failed]
     warnings = (f"{which}: {len(failed)} of {len(members)} seed(s) failed to train (on their validation throws they "
-                "could not be told from a coin), so their answers are near chance: retrain with another seed ('study train "
-                "--seed N'; in Python TrainConfig(seed=N)) or give another model",) if failed else ()
+                "could not be told from a coin), so their answers are near chance: retrain with another seed ('study "
+                "train --seed N'; in Python TrainConfig(seed=N)) or give another model",) if failed else ()
     exact = exact_warning(got.kind, which, got.seen, route, got.candidate is not None)
     return Answer(str(source), trust.label(p_heavy), max(p_heavy, 1.0 - p_heavy), p_heavy, which, assumed, traj,
                   warnings + ((exact,) if exact else ()), trust)

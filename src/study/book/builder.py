@@ -537,17 +537,16 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
 
 
 def _renders(path: Path) -> dict[str, float]:
-    """CPU seconds each of the chapters' renders took (``study.report.usercamera.RENDERS``), as the results file at
+    """CPU seconds each of the chapters' renders took (``study.report.usercamera.render_cpu``), as the results file at
     ``path`` holds them, by what was rendered (those it has: the clips are rendered once, so a resumed build's last
     process still reports them)."""
     from study.core.errors import StudyError
-    from study.report.usercamera import RENDERS
+    from study.report.usercamera import render_cpu
 
     try:
-        got = results.load(path) if path.is_file() else {}
+        return render_cpu(results.load(path)) if path.is_file() else {}
     except StudyError:  # a record only: the results' own check reports a bad file where it is read for the book
         return {}
-    return {what: float(got[name].value) for what, name in RENDERS.items() if name in got}
 
 
 RECOMMENDING = {"realworld", "usercamera"}

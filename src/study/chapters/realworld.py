@@ -440,10 +440,7 @@ def reported(rec: Recommendation, labels: dict[ModelKey, tuple[str, Sequence[Lab
                       for c, iv in per_class_interval(ls).items() if iv is not None}
                 for key, ls in (got or {}).items()}
 
-    def right(ls: Sequence[Label], c: str) -> int:
-        return sum(r.correct for r in ls if r.label == c)
-
-    gap = {key: {c: count(right(ls, c) - right(labels[key][1], c),  # type: ignore[misc]
+    gap = {key: {c: count(_right(ls, c) - _right(labels[key][1], c),  # type: ignore[misc]
                           f"rendered {c} videos right through floor marks minus through the renderer's camera, "
                           f"{labels[key][0]}", signed=True) for c in CLASSES if any(r.label == c for r in ls)}
            for key, ls in (floor or {}).items()}
@@ -497,6 +494,11 @@ def _acc_table(models: dict[str, tuple[Classified, Sequence[Label]]], n_rendered
                         "verdict": "paper vs ours", "real": "ours, real [95 % Wilson]"})
 
 
+def _right(labels: Sequence[Label], c: str) -> int:
+    """How many of the videos of class ``c`` ``labels`` got right."""
+    return sum(r.correct for r in labels if r.label == c)
+
+
 def _user_table(models: dict[str, tuple[Sequence[Label], ...]]) -> Table:
     """Each model (by name: its labels of the rendered videos from their exact heights, by the renderer's camera,
     by a user's path and through floor marks) per class: the videos right as counts, with their 95 % interval."""
@@ -506,7 +508,7 @@ def _user_table(models: dict[str, tuple[Sequence[Label], ...]]) -> Table:
         for c in CLASSES:
             row = {"model": name, "class": c}
             for key, got, iv in zip(("exact", "known", "user", "floor"), labels, ivs):
-                right, n = sum(r.correct for r in got if r.label == c), sum(r.label == c for r in got)
+                right, n = _right(got, c), sum(r.label == c for r in got)
                 row[key] = f"{right}/{n}" + ("" if iv[c] is None else f" ({100 * iv[c].lo:.0f}-{100 * iv[c].hi:.0f} %)")
             rows.append(row)
     return Table(rows, {"model": "model", "class": "class", "exact": "exact heights (the renderer's truth)",

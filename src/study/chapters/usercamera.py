@@ -66,10 +66,9 @@ class CameraSweep:
     """The candidate recommended for the floor path (None: the floor path had no error model to train one for)."""
     floor_fit: FloorFit | None = None
     """The floor path's error model and its check (``study.methods.floor_model``; None: it could not be fitted)."""
-    floor_render_s: tuple[float, float, int] = (0.0, 0.0, 0)
-    """The same as :attr:`render_s` for the floor path's development clips (``floor_model.development_clips``)."""
-    floor_clips: int = 0
-    """How many development clips the floor path has (their render time is reported only if each one's was kept)."""
+    floor_render_cpu: float | None = None
+    """CPU seconds the floor path's development clips (``floor_model.development_clips``) took to render (None:
+    not every clip's time was kept, and a partial sum would understate it)."""
 
     @property
     def recommended(self) -> camera_cost.Measured:
@@ -107,15 +106,15 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
     drag = camera_cost.drag_rule(f_train, ds.train.y, clips, read(first)[0], fps, contact)
     kinds = {name: kind(name) for name in rec.models}
     fit = floor_model.fitted(runner, progress)  # renders the development clips where they are not yet
-    dev = floor_model.development_clips(runner)
     return CameraSweep(tuple(clips), measured, rec.choice, kinds, camera_cost.floors(clips, tracked), drag,
                        camera_cost.size_error(clips, tracked, shape), _render_s(clips), rec.floor_choice, fit,
-                       _render_s(dev), len(dev))
+                       _render_cpu(floor_model.development_clips(runner)))
 
 
-def _all_timed(render_s: tuple[float, float, int], n: int) -> bool:
-    """Whether every one of ``n`` clips had its render time recorded (a partial sum would understate it)."""
-    return render_s[2] == n > 0
+def _render_cpu(clips: list[sweep.Clip]) -> float | None:
+    """CPU seconds ``clips`` took to render; None unless every clip's time was kept (a partial sum understates it)."""
+    cpu, _, timed = _render_s(clips)
+    return cpu if timed == len(clips) else None
 
 
 def _render_s(clips: list[sweep.Clip]) -> tuple[float, float, int]:
@@ -149,8 +148,8 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
     return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]
                  number(cpu, "camera sweep: CPU seconds to render the clips", unit="s") if timed == len(cs.clips)
                  else None, _floor_model_numbers(cs), kinds,
-                 number(cs.floor_render_s[0], "the floor path's development clips: CPU seconds to render", unit="s")
-                 if _all_timed(cs.floor_render_s, cs.floor_clips) else None)
+                 None if cs.floor_render_cpu is None else
+                 number(cs.floor_render_cpu, "the floor path's development clips: CPU seconds to render", unit="s"))
 
 
 def _floor_model_numbers(cs: CameraSweep) -> FloorModel | None:

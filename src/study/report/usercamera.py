@@ -21,8 +21,13 @@ Family = Literal[("all", *(f.key for f in CAMERA_FAMILIES))]  # type: ignore[val
 
 
 RENDERS = {"sweep": "usercamera.sweep.render_cpu_s", "floor development clips": "usercamera.sweep.floor_render_cpu_s"}
-"""What the chapter rendered -> the results' name for the CPU seconds it took (the build's ``timings.json`` and
-``scripts/build_time.py`` read them)."""
+"""What the chapter rendered -> the results' name for the CPU seconds it took."""
+
+
+def render_cpu(leaves: Mapping[str, Leaf]) -> dict[str, float]:
+    """CPU seconds each of :data:`RENDERS` took, from a results file's ``leaves``, by what was rendered (those it
+    has; empty if none): what the build's ``timings.json`` and ``scripts/build_time.py`` report."""
+    return {what: float(leaves[name].value) for what, name in RENDERS.items() if name in leaves}
 
 
 @dataclass(frozen=True)

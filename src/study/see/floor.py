@@ -63,8 +63,8 @@ where the error is. A flight's own frames are within about a centimetre. Two lea
 - **The contact prior is centred too low for a box.** A cube of half-edge a that lands in a random orientation has
   its centre 1.5 a up on average (a face: a; an edge: 1.41 a; a corner: 1.73 a), not at ``rest_height`` = a. So each
   contact is placed too far along its ray, and every arc after it too low: -25 to -44 mm on two bouncing clips
-  (low_009, square-on_000 of seed 2000). Centring the prior at 1.5 a (spread 0.25 a) brought those to 0 to -22 mm. On the tracked pixels, one clip's
-  fit then ran for minutes, so the pooled figure was not measured.
+  (low_009, square-on_000 of seed 2000). Centring the prior at 1.5 a (spread 0.25 a) brought those to 0 to -22
+  mm. On the tracked pixels, one clip's fit then ran for minutes, so the pooled figure was not measured.
 - **A box rocking on its edges is read as lying flat.** Its centre is 60-120 mm up for half a second while its ray
   meets the rest plane up to a metre behind it. Taking the near envelope of each ground run's distance along the
   ray (a morphological opening, 0.4 s) halved that error on one clip, but the short hops between rocks stay
