@@ -399,6 +399,7 @@ def test_cli_only_unknown_chapter_exits_2(tiny: Path, capsys: pytest.CaptureFixt
 
 
 @pytest.mark.slow
+@pytest.mark.book
 def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                            capfd: pytest.CaptureFixture[str]) -> None:
     """The real book, preset 'smoke', in a scratch root that links to the repo's sources.

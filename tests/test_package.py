@@ -122,6 +122,7 @@ def _readme_commands(readme: str) -> list[str]:
 
 
 @pytest.mark.slow  # simulates the smoke data set, trains two epochs, renders a throw, executes the data chapter
+@pytest.mark.book
 def test_every_readme_recipe_runs_as_written(tmp_path):
     """The README's blocks as written, on smoke sizes (every preset 'smoke', the network's budget 2 epochs): the
     Python block as a plain script, then every command line in the same folder, as a reader's would be; each
