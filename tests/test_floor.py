@@ -13,6 +13,7 @@ from study.core.errors import ConfigError, DataError
 from study.methods import sweep
 from study.see import floor
 from study.see.geometry import G
+from study.see.scale import ObjectShape
 from study.see.trajectory import Trajectory
 
 RECTANGLE = np.array([[-1.0, -0.75], [1.0, -0.75], [1.0, 0.75], [-1.0, 0.75], [0.0, -0.75], [0.0, 0.75]])
@@ -145,7 +146,7 @@ def test_a_contact_time_the_image_misjudges_by_two_frames_is_fitted_again_from_t
     off = late / fps
     contacts = [(0.0 + off, a), (hop - off, b)]
     frames = np.arange(1, len(t) - 1)
-    xyz = floor._joint(cam, t, uv[:, 0], uv[:, 1], [(0, 1, frames)], contacts, REST)[0]
+    xyz = floor._joint(cam, t, uv[:, 0], uv[:, 1], [(0, 1, frames)], contacts, REST, REST)[0]
     assert np.sqrt(np.mean((xyz[:, 2] - path[frames, 2]) ** 2)) < 0.005
 
 
@@ -168,7 +169,7 @@ def test_frames_split_at_a_misjudged_bounce_are_placed_by_the_fitted_contact_not
     seen = t1 + late / fps
     contacts = [(0.0, a), (seen, b), (t2, c)]
     flights = [(0, 1, np.flatnonzero((t > 0.0) & (t <= seen))), (1, 2, np.flatnonzero((t > seen) & (t < t2)))]
-    out = floor._joint(cam, t, uv[:, 0], uv[:, 1], flights, contacts, REST)
+    out = floor._joint(cam, t, uv[:, 0], uv[:, 1], flights, contacts, REST, REST)
     err = np.concatenate([xyz[:, 2] - path[f, 2] for (_, _, f), xyz in zip(flights, out)])
     z = np.concatenate([xyz[:, 2] for xyz in out])
     assert z.min() > REST - 0.005, "no frame placed below the floor beside the bounce"
@@ -246,3 +247,56 @@ def test_an_unreadable_floor_file_and_a_floor_that_cannot_fix_the_focal_length_a
     assert cal.assumed_fov and "60° taken" in cal.note() and "the marks cannot fix the focal length" in cal.note()
     fov = 2 * math.degrees(math.atan(0.5 * 480 / cal.camera.focal))
     assert fov == pytest.approx(60.0), "the assumed field of view is the one the note gives"
+
+
+def test_a_box_rocking_on_its_edge_between_flights_is_placed_on_its_ray_not_behind_it_on_the_floor():
+    """A box lies still for 2 s but rocks onto an edge for 0.3 s in the middle, its centre 4 cm up: its ray meets the
+    rest plane behind it, and the ground's near envelope keeps it where it is."""
+    fps, n = 60.0, 120
+    t = np.arange(n) / fps
+    path = np.tile([0.3, 0.2, REST], (n, 1))
+    rock = (t > 0.85) & (t < 1.15)
+    path[rock, 2] += 0.04
+    cam = scene(1.0, 20.0, 0.0, path)
+    uv = cam.project(path)
+    plane = floor._on_plane(cam, uv[:, 0], uv[:, 1], REST)
+    near = floor._near_envelope(cam, t, plane, np.ones(n, bool))
+    assert np.abs(plane[rock, 2] - path[rock, 2]).max() > 0.035, "the plane alone puts the rocking box on the floor"
+    assert np.abs(near[:, 2] - path[:, 2]).max() < 0.005
+    assert np.linalg.norm(near - path, axis=1).max() < 0.01
+
+
+def test_a_box_sliding_away_to_rest_keeps_its_distance():
+    """The envelope cuts short rises of the distance only: a box sliding away from the camera until friction stops
+    it is left where it is."""
+    fps, n = 60.0, 90
+    t = np.arange(n) / fps
+    slide = np.minimum(t, 1.0)
+    path = np.column_stack([np.zeros(n), -0.5 + 1.2 * slide - 0.6 * slide**2, np.full(n, REST)])  # 0.6 m, 1.2 m/s
+    cam = scene(1.0, 20.0, 0.0, path)
+    uv = cam.project(path)
+    plane = floor._on_plane(cam, uv[:, 0], uv[:, 1], REST)
+    near = floor._near_envelope(cam, t, plane, np.ones(n, bool))
+    np.testing.assert_allclose(near, path, atol=1e-6)
+
+
+@pytest.mark.parametrize("kind, size", [("sphere", (0.067,)), ("box", (0.2, 0.2, 0.2)), ("box", (0.1, 0.2, 0.4)),
+                                        ("cylinder", (0.1, 0.3))])
+def test_the_contact_height_is_the_support_functions_mean_over_random_orientations(kind, size):
+    """Averaged over directions u, a body touching the floor has its centre as high as its support function h(u): a
+    box's half-edges times |u|, summed; a cylinder's half-length times |u_z| plus its radius times the rest."""
+    n = 200_000  # a Fibonacci sphere: directions spread evenly
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    r = np.sqrt(1 - z**2)
+    phi = math.pi * (1 + math.sqrt(5)) * i
+    u = np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+    if kind == "sphere":
+        h = np.full(n, size[0] / 2)
+    elif kind == "box":
+        h = np.abs(u) @ (np.array(size) / 2)
+    else:
+        h = size[1] / 2 * np.abs(u[:, 2]) + size[0] / 2 * np.sqrt(1 - u[:, 2] ** 2)
+    shape = ObjectShape(kind, size)
+    assert floor.contact_height(shape) == pytest.approx(h.mean(), rel=1e-4)
+    assert shape.rest_height() <= floor.contact_height(shape) <= h.max() + 1e-12

@@ -23,7 +23,7 @@ from study.report.text import Table
 from study.runs import measured, recommended
 from study.see import track
 from study.see.config import TrackConfig
-from study.see.floor import Floor, calibrate, on_floor
+from study.see.floor import Floor, calibrate, contact_height, on_floor
 from study.see.marks import located, needs_finding, read as read_floor
 from study.see.paths import FLOOR_KEYS
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
@@ -243,10 +243,11 @@ def _answer(source: str | Path, got: _Model, track_config: TrackConfig | None, o
     rest = rest_height if rest_height is not None else object_shape.rest_height() if object_shape else 0.0
     if floor is not None:  # the camera the floor marks give: each frame's own depth
         size = object_shape.mean_size() if object_shape else None
-        traj, cal = on_floor(pixels, floor, rest, size)
+        contact = contact_height(object_shape) if object_shape and rest_height is None else rest
+        traj, cal = on_floor(pixels, floor, rest, size, contact)
         weighed = f", the blob's size against a {size:.3f} m mean silhouette" if size else ""
         how = (f"{cal.note()}; each frame's centre from the contacts and the flights between them{weighed}, the "
-               f"centre {rest:.3f} m up at rest")
+               f"centre {rest:.3f} m up at rest and {contact:.3f} m on average at a contact")
     else:
         traj, scale = in_metres(pixels, object_shape, scale_from, metres_per_pixel)
         how = (f"{scale}; the ground at the lowest centre (row {traj.ground_v:.0f}), one scale for the whole video "

@@ -319,7 +319,7 @@ def _on_floor(a: argparse.Namespace):
     the floor says of the camera. The floor is read (and its marks found) before the tracking."""
     from study.core.errors import ConfigError
     from study.see import track
-    from study.see.floor import on_floor
+    from study.see.floor import contact_height, on_floor
     from study.answer import checked_floor
     from study.see.marks import read
 
@@ -329,7 +329,8 @@ def _on_floor(a: argparse.Namespace):
         raise ConfigError("--floor: give the object's size (--object-size, and --object-shape) for the height of its "
                           "centre when it lies on the floor")
     found = checked_floor(marks, a.video)  # before the tracking
-    traj, cal = on_floor(track.track_video(a.video, _track_config(a)), found, shape.rest_height(), shape.mean_size())
+    traj, cal = on_floor(track.track_video(a.video, _track_config(a)), found, shape.rest_height(),
+                         shape.mean_size(), contact_height(shape))
     print(f"{a.video}: {cal.note()}")
     return traj
 
