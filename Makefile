@@ -32,7 +32,7 @@ book: $(BIN)/.installed
 test: $(BIN)/.installed
 	$(BIN)/python -m pytest -n 2 --dist worksteal -m "not book"
 
-## The whole book on the smoke preset, checked page by page, and every README recipe as written (about 20 minutes
+## The whole book on the smoke preset, checked page by page, and every README recipe as written (about 15 minutes
 ## on two cores). CI runs it after `make test`.
 test-book: $(BIN)/.installed
 	$(BIN)/python -m pytest -n 2 --dist worksteal -m book
