@@ -300,3 +300,13 @@ def test_the_contact_height_is_the_support_functions_mean_over_random_orientatio
     shape = ObjectShape(kind, size)
     assert floor.contact_height(shape) == pytest.approx(h.mean(), rel=1e-4)
     assert shape.rest_height() <= floor.contact_height(shape) <= h.max() + 1e-12
+
+
+def test_a_contact_height_below_the_rest_height_is_refused_by_name():
+    """An object touches the floor with its centre at least as high as when it rests on it."""
+    t, path = tumbling_throw()
+    cam = scene(1.0, 20.0, 0.0, path)
+    uv = cam.project(path)
+    traj = _track(cam, t, uv, np.full(len(t), 20.0))
+    with pytest.raises(ConfigError, match="contact height"):
+        floor.on_floor(traj, marks(cam, path, 0.0), REST, contact_height=0.5 * REST)

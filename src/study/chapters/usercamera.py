@@ -113,8 +113,13 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
 
 def _render_cpu(clips: list[sweep.Clip]) -> float | None:
     """CPU seconds ``clips`` took to render; None unless every clip's time was kept (a partial sum understates it)."""
-    cpu, _, timed = _render_s(clips)
-    return cpu if timed == len(clips) else None
+    return _all_timed(_render_s(clips), len(clips))
+
+
+def _all_timed(render_s: tuple[float, float, int], n_clips: int) -> float | None:
+    """The CPU seconds of ``render_s`` (:func:`_render_s`) if it timed all ``n_clips`` clips, else None."""
+    cpu, _, timed = render_s
+    return cpu if timed == n_clips else None
 
 
 def _render_s(clips: list[sweep.Clip]) -> tuple[float, float, int]:
@@ -140,14 +145,14 @@ def _sweep_numbers(cs: CameraSweep) -> Sweep:
                                number(1000 * cs.floors[g].true_rows if g in cs.floors else math.nan,
                                       f"camera sweep ({g}): least one-scale height error", unit="mm"), by_path)
     drag = {PATH_KEYS[k]: number(iv, f"camera sweep: drag rule's accuracy, heights {k}") for k, iv in cs.drag.items()}
-    cpu, _, timed = cs.render_s
+    cpu = _all_timed(cs.render_s, len(cs.clips))
     kinds = {cs.kinds[name]: {PATH_KEYS[k]: number(r.answered, f"camera sweep: {name}'s accuracy on the clips "
                                                    f"that gave heights {k}", no_heights=r.no_heights)
                               for k, r in m.results["all"].items() if r.answered is not None}
              for name, m in cs.measured.items()}
     return Sweep(groups, drag, number(cs.size_error, "camera sweep: median relative error of a frame's blob size"),  # type: ignore[arg-type]
-                 number(cpu, "camera sweep: CPU seconds to render the clips", unit="s") if timed == len(cs.clips)
-                 else None, _floor_model_numbers(cs), kinds,
+                 None if cpu is None else number(cpu, "camera sweep: CPU seconds to render the clips", unit="s"),
+                 _floor_model_numbers(cs), kinds,
                  None if cs.floor_render_cpu is None else
                  number(cs.floor_render_cpu, "the floor path's development clips: CPU seconds to render", unit="s"))
 

@@ -247,6 +247,11 @@ def contact_height(shape: ObjectShape) -> float:
     return (length + math.pi * d / 2) / 4
 
 
+def _frame_s(t: np.ndarray) -> float:
+    """Seconds between frames of the times ``t`` (n,) s: the median step (1 for a single frame)."""
+    return float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+
+
 def _median5(a: np.ndarray) -> np.ndarray:
     """A centred 5-frame running median of ``a`` (n, k), NaN ignored, shorter at the ends."""
     out = np.full_like(a, np.nan)
@@ -300,7 +305,7 @@ twice differentiated over the 5 frames ``phases`` reads, is about half of g at 6
 def _smoothed(t: np.ndarray, v: np.ndarray, seconds: float) -> np.ndarray:
     """``v`` (n,) through a running quadratic fit over ``seconds`` (at least 5 frames; NaN kept); as it is at 30
     frames a second or slower."""
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    dt = _frame_s(t)
     half = max(2, int(round(seconds / dt / 2)))
     if half <= 2:
         return v
@@ -355,10 +360,10 @@ EXTEND_PX = 1.5
 (the phases' curvature blurs a flight's last frames into the bounce)."""
 CONTACT_SD = 0.5
 """A contact's centre height prior: the object's mean height at a contact (:func:`contact_height`: a box lands on an
-edge or a corner more often than on a face) with a spread of this share of its rest
-height. A cube's orientations spread its contact height by 0.15 of its half-edge; the tracker's contact pixel and
-time add to it. On the 18 development clips (seed 2000, :func:`centres`'s measurements below) spreads of 0.15, 0.25
-and 0.5 gave 27.0, 26.3 and 25.6 mm."""
+edge or a corner more often than on a face) with a spread of this share of its rest height. A cube's orientations
+spread its contact height by 0.15 of its half-edge; the tracker's contact pixel and time add to it. On the 18
+development clips of seed 2000 (the module's measurements) spreads of 0.15, 0.25 and 0.5 gave 27.0, 26.3 and 25.6
+mm."""
 CONTACT_SINK = 0.15
 """The prior's spread below ``rest_height``, a share of it: a centre sinks below its resting height only as far as
 the object gives (a ball's squash), so a contact placed lower is held back more than one placed higher."""
@@ -419,10 +424,10 @@ def _merged(t: np.ndarray, u: np.ndarray, v: np.ndarray, arcs: list[np.ndarray],
 def _contacts(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, arcs: list[np.ndarray],
               contact_height: float) -> tuple[list[tuple[float, np.ndarray]], list[Flight]]:
     """The contacts (time, where the contact's ray meets the plane ``contact_height`` up, metres) and the flights
-    between them, from the
-    image's flights ``arcs``: two flights a bounce apart (:data:`BOUNCE_S`) share a contact; with longer on the
-    ground between, the first lands and the next takes off. A flight that never lands is left out (unknown)."""
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    between them, from the image's flights ``arcs``: two flights a bounce apart (:data:`BOUNCE_S`) share a contact;
+    with longer on the ground between, the first lands and the next takes off. A flight that never lands is left out
+    (unknown)."""
+    dt = _frame_s(t)
     gap_max = max(2, int(round(BOUNCE_S / dt)))
     contacts: list[tuple[float, np.ndarray]] = []
 
@@ -596,7 +601,7 @@ def _near_envelope(camera: Camera, t: np.ndarray, plane: np.ndarray, ground: np.
     frames, :data:`GROUND_OPEN_S` each side. A box rocking onto an edge lifts its centre off the rest plane for a
     fraction of a second, so its ray meets that plane behind it: a short rise of the distance, which the opening
     removes, placing the centre on the ray where the box is."""
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    dt = _frame_s(t)
     w = max(1, int(round(GROUND_OPEN_S / dt)))
     ray = plane - np.asarray(camera.position)  # (n, 3)
     dist = np.linalg.norm(ray, axis=1)  # (n,) metres, NaN where the ray misses the plane
@@ -613,9 +618,10 @@ def _opening(a: np.ndarray, w: int) -> np.ndarray:
     a steady trend, but over a run's last (and first) ``w`` frames a trend away from the camera is held at its value
     ``w`` frames in (a slide that ends in a take-off is pulled towards the camera there). A run shorter than ``w``
     frames is held at its nearest."""
-    n = len(a)
-    eroded = np.array([a[max(0, i - w): i + w + 1].min() for i in range(n)])
-    return np.array([eroded[max(0, i - w): i + w + 1].max() for i in range(n)])
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    eroded = minimum_filter1d(a, 2 * w + 1, mode="constant", cval=np.inf)  # a window past an end: cut short
+    return maximum_filter1d(eroded, 2 * w + 1, mode="constant", cval=-np.inf)
 
 
 def heights(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_height: float) -> np.ndarray:
