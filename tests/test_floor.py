@@ -5,13 +5,16 @@ path (study.see.ground) cannot follow. Inline scenes: the camera and the throw a
 from __future__ import annotations
 
 import math
+import types
 
 import numpy as np
 import pytest
+import scripts_toys
 
 from study.core.errors import ConfigError, DataError
 from study.methods import sweep
 from study.see import floor
+from study.see.config import COLORS
 from study.see.geometry import G
 from study.see.scale import ObjectShape
 from study.see.trajectory import Trajectory
@@ -310,3 +313,19 @@ def test_a_contact_height_below_the_rest_height_is_refused_by_name():
     traj = _track(cam, t, uv, np.full(len(t), 20.0))
     with pytest.raises(ConfigError, match="contact height"):
         floor.on_floor(traj, marks(cam, path, 0.0), REST, contact_height=0.5 * REST)
+
+
+def test_floor_limits_script_lowers_only_a_presets_s_and_v_floor_and_swaps_in_the_renderers_pixels():
+    limits = scripts_toys.script("scripts/floor_limits.py")
+    for colour, ((h_lo, _, _), (h_hi, s_hi, v_hi)) in COLORS.items():
+        lo, hi = limits.shaded_config(colour).bounds()
+        assert list(lo) == [h_lo, 100, 25] and list(hi) == [h_hi, s_hi, v_hi], colour
+    t = np.arange(6) / 30
+    frame = types.SimpleNamespace(width=640, height=360)
+    px = _track(frame, t, np.column_stack([np.arange(6.0), 10 + np.arange(6.0)]), np.full(6, 20.0))
+    swapped = limits.rendered(px, {"u": np.array([100.0, 101.0, 102.0, 103.0]), "v": np.array([50.0, 51, 52, 53])})
+    np.testing.assert_array_equal(swapped.u, [100, 101, 102, 103, 4, 5])  # frames past the truth's end kept
+    np.testing.assert_array_equal(swapped.v, [50, 51, 52, 53, 14, 15])
+    np.testing.assert_array_equal(swapped.diameter, px.diameter)  # the blob sizes stay the tracker's
+    e = [np.array([0.003, -0.004]), np.array([0.0])]
+    assert limits.rms_mm(e) == pytest.approx(1000 * math.sqrt((0.003**2 + 0.004**2) / 3))

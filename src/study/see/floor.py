@@ -31,52 +31,11 @@ With the camera known, a frame's ray fixes the centre up to its depth, and the t
 
 A flight that never lands, and a centre placed where no throw could be, are left unknown.
 
-**Measured, and not yet good enough on video** (the figures in this paragraph and the next come before the two
-changes at the end of this text). On inline scenes (``tests/test_floor.py``: a throw that turns at
-every bounce, four cameras) the heights are under a centimetre RMS from exact pixels and under 3 cm with marks
-clicked a pixel off. On rendered video (``scripts/floor_sweep.py --per-family 5 --seed 2000``: 20 development clips
-of another seed than the sweep's, marks clicked a pixel off) the heights are 33 mm RMS with each clip's median
-removed from the tracker's pixels (36 mm without the apparent size; the mean silhouette's one scale: 74 mm), and
-11 mm through the exact camera at each frame's true depth; on 12 clips of a third seed (``--per-family 3 --seed
-2001``), 48 mm (64 mm without the apparent size), most of it one high camera's clip at 100 mm (the others 9-51).
-The size helps most clips, not all: on seed 2000, 11 of 18 came closer and 6 went further (oblique cameras 50 -> 41
-mm, high 37 -> 30, square-on 22 -> 20, low 35 -> 40: two low cameras' clips 58 -> 74 and 24 -> 48 mm, small blobs
-at 480p whose size the fit trusts too much).
-What is left: the first flight's depth (no contact before it: the apparent size holds it only loosely), the
-tracker's pixels at speed and where it sees only part of the object (a blob a quarter too small, its centre 18
-pixels off at the top of a high camera's fall), and a box whose centre stands on an edge between flights (read as on
-the floor, at rest height).
-
-Where the error comes from, on the same 18 clips of seed 2000 (RMS with each clip's median removed; in brackets the
-first flight's frames), measured once by hand, not by a script here: :func:`on_floor` run on each clip with the
-track's pixels swapped for the truth CSV's ``u``, ``v`` and :func:`calibrate`'s camera for
-``study.methods.sweep.camera(shot, truth)``, one at a time. With the renderer's exact pixels and the true camera,
-24 mm (34); exact pixels and the camera of the clicked marks, 26 mm (37); the tracker's pixels and the true camera,
-44 mm (64, one oblique clip at 183 mm); the tracker's pixels and the clicked marks' camera, 33 mm (48). So the fit
-itself, not the calibration, keeps the heights above 20 mm: even from perfect inputs its first flights are 34 mm
-off, and the tracker's pixels move which frames read as flight, so a better camera can give worse heights clip by
-clip (the 33 mm is not a stable figure). The marks' camera is off by 5-15 % in focal length on 10 of the 18 clips
-(six marks, a pixel of click noise); refining it by least squares on the marks alone fixed some clips' focal length
-and made the heights worse (42 mm), and choosing the focal length by how well the throw's arcs then fit gravity did
-not find the true one (the fit's cost is flat and jumps where the flights' frames change). Tying a first flight's
-heading to where the throw goes after its contact did not help either (33-38 mm for a spread of 0.1 to 1).
-
-A closer look per frame (exact pixels, the true camera) corrects that split: the frames "before the first contact"
-counted there run until the object first lies flat, so they hold the tumble after the first landing, and that is
-where the error is; a flight's own frames are within about a centimetre. Two causes, both now in the fit:
-- **The contact prior was centred too low for a box.** A cube that lands in a random orientation has its centre 1.5
-  half-edges up on average, not at ``rest_height``: each contact was placed too far along its ray, and every arc
-  after it too low (-25 to -44 mm on two bouncing clips). The prior is now centred at :func:`contact_height`.
-- **A box rocking on its edges was read as lying flat**, its centre 60-120 mm up for half a second while its ray
-  met the rest plane up to a metre behind it: the ground frames now take the near envelope of the distance
-  (:func:`_near_envelope`).
-On the 18 tracked development clips of seed 2000 (marks clicked a pixel off, each clip's median removed; the
-harness ran :func:`on_floor` on cached tracks with ``study.methods.camera_cost.clicked_floor``): 33.4 mm before,
-28.2 mm with the envelope alone, 25.6 mm with both (square-on 17, low 25, oblique 32, high 28; the tumble after
-the first landing 48 -> 36 mm, ground frames 8 -> 7). The settings were chosen on those clips; on the 12 clips
-of seed 2001, never used to choose them, 48.3 -> 39.0 mm (high cameras 69 -> 60 mm: one heavy box's clip at
-1080p is 84 mm off, its tumble after the first landing 169 mm). Still short of 20 mm: the tumble after the first
-landing is what is left.
+How well: the book's camera chapter measures the path on the camera sweep. On development clips of other seeds
+(``scripts/floor_limits.py``), it is 26-39 mm RMS with each clip's median removed; the renderer's own pixels without
+the apparent size give 18-23 mm. The tracker's pixels and blob sizes hold it back, more than this fit does.
+``docs/floor-path.md`` keeps those measurements, what each setting here was chosen on, and what was tried and not
+kept.
 """
 
 from __future__ import annotations

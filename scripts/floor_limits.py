@@ -1,0 +1,116 @@
+"""What holds the floor path's heights back: the same clips through ``study.see.floor.on_floor`` with its inputs
+swapped one at a time, the marks clicked a pixel off as the camera sweep clicks them.
+
+Renders (or reads from the cache) ``--per-family`` clips of each camera family at ``--seed`` (develop on another
+seed than the sweep's own), then reads each clip's heights through the floor's camera from:
+
+- ``tracked``: the tracker's pixels and blob sizes, as a user's video gives them (the shipped path);
+- ``shaded``: the tracker run with every colour's lower bounds at S 100, V 25, the bounds issue 28 chose for
+  'orange' so that a box's faces turned from the light stay in its blob (the 'green', 'blue' and 'red' presets
+  keep V 60, which drops them: the blob's centre sits on the lit faces);
+- ``rendered``: the renderer's own pixel of each frame's centre (the truth CSV's ``u``, ``v``), the blob sizes
+  still the tracker's;
+
+each with the apparent size and without it (``size=None``). Prints each way's RMS height error with each clip's
+median removed, pooled over frames and by camera family, millimetres; ``--clips`` adds a row per clip::
+
+    .venv/bin/python scripts/floor_limits.py --per-family 3 --seed 2001 --out /tmp/floor-dev3
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from study.core.errors import StudyError
+from study.methods import camera_cost, sweep
+from study.see import floor, render, track
+from study.see.config import COLORS, TrackConfig
+from study.see.trajectory import Trajectory
+from study.simulate import synth
+
+SHADED_S, SHADED_V = 100, 25
+"""The lower saturation and value bounds of the ``shaded`` tracker (issue 28's for 'orange')."""
+PIXELS = ("tracked", "shaded", "rendered")
+
+
+def shaded_config(colour: str) -> TrackConfig:
+    """The tracker's settings for ``colour`` with its lower S and V bounds at :data:`SHADED_S`, :data:`SHADED_V`."""
+    (h_lo, _, _), (h_hi, s_hi, v_hi) = COLORS[colour]
+    return TrackConfig(hsv=(h_lo, SHADED_S, SHADED_V, h_hi, s_hi, v_hi), progress=False)
+
+
+def rendered(px: Trajectory, truth: dict[str, np.ndarray]) -> Trajectory:
+    """``px`` with each frame's centre the renderer's (where the truth has the frame)."""
+    n = min(len(px.t), len(truth["u"]))
+    return replace(px, u=np.r_[truth["u"][:n], px.u[n:]], v=np.r_[truth["v"][:n], px.v[n:]])
+
+
+def errors(px: Trajectory, clip: sweep.Clip, shape, sized: bool) -> np.ndarray:
+    """(k,) metres: the floor path's height minus the truth in each frame it places, each clip's median removed."""
+    truth = render.read_truth(clip.video.truth)
+    world = np.column_stack([truth["x"], truth["y"], truth["z"]])
+    marks = camera_cost.clicked_floor(sweep.camera(clip.shot, world), world, clip.video.path.name)
+    rest = clip.video.rest_height
+    traj, _ = floor.on_floor(px, marks, rest, shape.mean_size() if sized else None, floor.contact_height(shape))
+    h = np.where(traj.status > 0, traj.height, np.nan)
+    n = min(len(h), len(world))
+    e = h[:n] - (world[:n, 2] - rest)
+    e = e[np.isfinite(e)]
+    return e - np.median(e) if len(e) else e
+
+
+def rms_mm(parts: list[np.ndarray]) -> float:
+    """The RMS of all of ``parts`` pooled, millimetres (NaN for none)."""
+    a = np.concatenate(parts) if parts else np.zeros(0)
+    return 1000 * float(np.sqrt(np.mean(a**2))) if len(a) else float("nan")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--per-family", type=int, default=3, help="clips of each camera family (default 3)")
+    ap.add_argument("--seed", type=int, default=2001, help="seed of the throws and shots (default 2001: not the sweep's)")
+    ap.add_argument("--out", type=Path, default=Path("/tmp/floor-limits"), help="where the clips are rendered and cached")
+    ap.add_argument("--clips", action="store_true", help="also print a row per clip")
+    a = ap.parse_args()
+    cfg = synth.SynthConfig.preset("paper")
+    shape = camera_cost.shape_of(cfg)
+    clips = sweep.sweep_set(cfg, per_family=a.per_family, seed=a.seed, out_dir=a.out, progress=True)
+    ways = [(p, s) for p in PIXELS for s in (True, False)]
+    table: dict[tuple[str, bool], dict[str, list[np.ndarray]]] = {w: {} for w in ways}
+    rows = []
+    for clip in clips:
+        v = clip.video
+        truth = render.read_truth(v.truth)
+        cells = []
+        try:
+            px = {"tracked": track.track_video(v.path, v.track_config()),
+                  "shaded": track.track_video(v.path, shaded_config(clip.shot.colour))}
+        except StudyError as e:
+            rows.append(f"{v.path.name}: not tracked ({str(e)[:60]})")
+            continue
+        px["rendered"] = rendered(px["tracked"], truth)
+        for w in ways:
+            try:
+                e = errors(px[w[0]], clip, shape, w[1])
+            except StudyError as err:
+                cells.append(f"{type(err).__name__}")
+                continue
+            for g in ("all", clip.shot.family):
+                table[w].setdefault(g, []).append(e)
+            cells.append(f"{rms_mm([e]):.0f}")
+        rows.append(f"{v.path.name} {clip.shot.height_px}p: " + " | ".join(cells))
+    names = [f"{p}{'' if s else ' no size'}" for p, s in ways]
+    if a.clips:
+        print("clip: " + " | ".join(names))
+        print("\n".join(rows))
+    print("group: " + " | ".join(names) + " (RMS mm, each clip's median removed)")
+    for g in table[ways[0]]:
+        print(f"{g}: " + " | ".join(f"{rms_mm(table[w].get(g, [])):.1f}" for w in ways))
+
+
+if __name__ == "__main__":
+    main()
