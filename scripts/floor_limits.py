@@ -49,24 +49,20 @@ def rendered(px: Trajectory, truth: dict[str, np.ndarray]) -> Trajectory:
     return replace(px, u=np.r_[truth["u"][:n], px.u[n:]], v=np.r_[truth["v"][:n], px.v[n:]])
 
 
-def errors(px: Trajectory, clip: sweep.Clip, shape, sized: bool) -> np.ndarray:
-    """(k,) metres: the floor path's height minus the truth in each frame it places, each clip's median removed."""
-    truth = render.read_truth(clip.video.truth)
-    world = np.column_stack([truth["x"], truth["y"], truth["z"]])
-    marks = camera_cost.clicked_floor(sweep.camera(clip.shot, world), world, clip.video.path.name)
-    rest = clip.video.rest_height
+def errors(px: Trajectory, marks: floor.Floor, world: np.ndarray, rest: float, shape, sized: bool) -> np.ndarray:
+    """(k,) metres: the floor path's height minus the truth ``world`` (n, 3) metres in each frame it places, through
+    the camera the ``marks`` give, for an object resting ``rest`` metres up."""
     traj, _ = floor.on_floor(px, marks, rest, shape.mean_size() if sized else None, floor.contact_height(shape))
     h = np.where(traj.status > 0, traj.height, np.nan)
     n = min(len(h), len(world))
     e = h[:n] - (world[:n, 2] - rest)
-    e = e[np.isfinite(e)]
-    return e - np.median(e) if len(e) else e
+    return e[np.isfinite(e)]
 
 
-def rms_mm(parts: list[np.ndarray]) -> float:
-    """The RMS of all of ``parts`` pooled, millimetres (NaN for none)."""
-    a = np.concatenate(parts) if parts else np.zeros(0)
-    return 1000 * float(np.sqrt(np.mean(a**2))) if len(a) else float("nan")
+def centred_mm(parts: list[np.ndarray]) -> float:
+    """The RMS of clips' height errors ``parts`` (each (k,) metres) with each clip's median removed, millimetres
+    (``camera_cost.rms_mm``; NaN for none)."""
+    return camera_cost.rms_mm(parts)[1]
 
 
 def main() -> None:
@@ -93,15 +89,17 @@ def main() -> None:
             rows.append(f"{v.path.name}: not tracked ({str(e)[:60]})")
             continue
         px["rendered"] = rendered(px["tracked"], truth)
+        world = np.column_stack([truth["x"], truth["y"], truth["z"]])
+        marks = camera_cost.clicked_floor(sweep.camera(clip.shot, world), world, v.path.name)
         for w in ways:
             try:
-                e = errors(px[w[0]], clip, shape, w[1])
+                e = errors(px[w[0]], marks, world, v.rest_height, shape, w[1])
             except StudyError as err:
                 cells.append(f"{type(err).__name__}")
                 continue
             for g in ("all", clip.shot.family):
                 table[w].setdefault(g, []).append(e)
-            cells.append(f"{rms_mm([e]):.0f}")
+            cells.append(f"{centred_mm([e]):.0f}")
         rows.append(f"{v.path.name} {clip.shot.height_px}p: " + " | ".join(cells))
     names = [f"{p}{'' if s else ' no size'}" for p, s in ways]
     if a.clips:
@@ -109,7 +107,7 @@ def main() -> None:
         print("\n".join(rows))
     print("group: " + " | ".join(names) + " (RMS mm, each clip's median removed)")
     for g in table[ways[0]]:
-        print(f"{g}: " + " | ".join(f"{rms_mm(table[w].get(g, [])):.1f}" for w in ways))
+        print(f"{g}: " + " | ".join(f"{centred_mm(table[w].get(g, [])):.1f}" for w in ways))
 
 
 if __name__ == "__main__":

@@ -327,5 +327,5 @@ def test_floor_limits_script_lowers_only_a_presets_s_and_v_floor_and_swaps_in_th
     np.testing.assert_array_equal(swapped.u, [100, 101, 102, 103, 4, 5])  # frames past the truth's end kept
     np.testing.assert_array_equal(swapped.v, [50, 51, 52, 53, 14, 15])
     np.testing.assert_array_equal(swapped.diameter, px.diameter)  # the blob sizes stay the tracker's
-    e = [np.array([0.003, -0.004]), np.array([0.0])]
-    assert limits.rms_mm(e) == pytest.approx(1000 * math.sqrt((0.003**2 + 0.004**2) / 3))
+    e = [np.array([0.003, -0.004]), np.array([0.0])]  # medians -0.0005 and 0, removed per clip
+    assert limits.centred_mm(e) == pytest.approx(1000 * math.sqrt(2 * 0.0035**2 / 3))

@@ -153,12 +153,12 @@ def video_heights(v: Video, shape: ObjectShape, camera: Callable[[np.ndarray], C
             depth = np.concatenate([depth, np.full(max(0, len(px.t) - len(depth)), depth[-1])])[: len(px.t)]
             return set_camera(px, cam, depth, rest)
         if name == FLOOR_PATH:
-            return floor.on_floor(px, clicked_floor(camera(world), world, v.path.name), rest, shape.mean_size(),
-                                  floor.contact_height(shape))[0]
-        if not drawn:
+            marks = clicked_floor(camera(world), world, v.path.name)
+        elif drawn:
+            marks = found_floor(v, world)
+        else:
             raise ConfigError("no floor marks drawn in the video")
-        return floor.on_floor(px, found_floor(v, world), rest, shape.mean_size(),
-                                  floor.contact_height(shape))[0]
+        return floor.on_floor(px, marks, rest, shape.mean_size(), floor.contact_height(shape))[0]
 
     for name in MEASURED:
         try:
