@@ -179,12 +179,12 @@ def test_frames_split_at_a_misjudged_bounce_are_placed_by_the_fitted_contact_not
     assert np.sqrt(np.mean(err**2)) < 0.012
 
 
-def test_the_apparent_size_holds_a_first_flight_that_a_low_camera_and_a_tracker_jump_leave_open():
+def test_the_apparent_size_holds_a_first_flight_that_a_low_camera_and_a_tracker_jump_leave_open(monkeypatch):
     """A camera 0.4 m over the floor, a 4-pixel tracker jump for three frames of the first fall, over 8 draws of the
     pixels' noise: with each frame's depth from its apparent size the first flight (no contact before it) comes
-    closer on average (exact sizes: 18 -> 16 mm); a size 10 % off with 5 % noise a frame, the clip's bias the fit
-    finds, costs under 2.5 mm on average (with the bias's prior as tight as 0.1, 6 mm: the prior pulled the bias to
-    none, and the first flight with it)."""
+    closer on average, a little at the shipped spread (exact sizes: 17.9 -> 17.5 mm; the spread is loose because a
+    video's blob is not exact) and more with the size trusted (spread 0.1: 14.3 mm); a size 10 % off with 5 % noise
+    a frame, the clip's bias the fit finds, costs under 2.5 mm on average."""
     t, path = tumbling_throw(fps=30.0)
     cam = scene(0.4, 3.0, 20.0, path)
     cal = floor.calibrate(marks(cam, path, 1.0), cam.width, cam.height)
@@ -194,17 +194,24 @@ def test_the_apparent_size_holds_a_first_flight_that_a_low_camera_and_a_tracker_
     def off(z: np.ndarray) -> float:
         return float(np.sqrt(np.nanmean((z - path[:, 2])[first] ** 2)))
 
-    without, exact, biased = [], [], []
-    for seed in range(8):
-        rng = np.random.default_rng(100 + seed)
-        uv = cam.project(path) + rng.normal(0.0, 0.5, (len(t), 2))
-        uv[6:9, 1] += 4.0
-        sized = 1.1 * depth * np.exp(rng.normal(0.0, 0.05, len(t)))
-        without.append(off(floor.heights(cal.camera, t, uv[:, 0], uv[:, 1], REST)))
-        exact.append(off(floor.centres(cal.camera, t, uv[:, 0], uv[:, 1], REST, depth)[0][:, 2]))
-        biased.append(off(floor.centres(cal.camera, t, uv[:, 0], uv[:, 1], REST, sized)[0][:, 2]))
-    assert np.mean(exact) < 0.9 * np.mean(without)
-    assert np.mean(biased) < np.mean(without) + 0.0025, f"{np.mean(biased)} {np.mean(without)} {np.mean(exact)}"
+    def mean_offs() -> tuple[float, float, float]:
+        without, exact, biased = [], [], []
+        for seed in range(8):
+            rng = np.random.default_rng(100 + seed)
+            uv = cam.project(path) + rng.normal(0.0, 0.5, (len(t), 2))
+            uv[6:9, 1] += 4.0
+            sized = 1.1 * depth * np.exp(rng.normal(0.0, 0.05, len(t)))
+            without.append(off(floor.heights(cal.camera, t, uv[:, 0], uv[:, 1], REST)))
+            exact.append(off(floor.centres(cal.camera, t, uv[:, 0], uv[:, 1], REST, depth)[0][:, 2]))
+            biased.append(off(floor.centres(cal.camera, t, uv[:, 0], uv[:, 1], REST, sized)[0][:, 2]))
+        return float(np.mean(without)), float(np.mean(exact)), float(np.mean(biased))
+
+    without, exact, biased = mean_offs()
+    assert exact < without
+    assert biased < without + 0.0025, f"{biased} {without} {exact}"
+    monkeypatch.setattr(floor, "SIZE_SD", 0.1)
+    _, trusted, _ = mean_offs()
+    assert trusted < 0.9 * without, "a size trusted more holds the first flight more"
 
 
 def _track(cam, t: np.ndarray, uv: np.ndarray, diameter: np.ndarray) -> Trajectory:

@@ -12,9 +12,9 @@ from study.core.errors import ConfigError, check_range
 COLORS: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
     "tennis": ((22, 70, 90), (50, 255, 255)),
     "orange": ((3, 100, 25), (20, 255, 255)),
-    "red": ((170, 120, 70), (8, 255, 255)),
-    "green": ((50, 100, 60), (80, 255, 255)),
-    "blue": ((100, 120, 60), (130, 255, 255)),
+    "red": ((170, 100, 25), (8, 255, 255)),
+    "green": ((50, 100, 25), (80, 255, 255)),
+    "blue": ((100, 100, 25), (130, 255, 255)),
 }
 """Named HSV ranges (OpenCV scale: H 0-179, S and V 0-255), (low, high); a low hue above the high
 one wraps through 0 (red). 'tennis' is a yellow to yellow-green felt ball, 'orange' the colour
@@ -24,7 +24,9 @@ one wraps through 0 (red). 'tennis' is a yellow to yellow-green felt ball, 'oran
 a fifth of the box's pixels (its faces turned from the light) and set the centroid on the lit faces, about 15 mm
 high at 4 m. S 100, V 25 were chosen on development renders (render seed 2000, 12 throws at the book's settings,
 never the book's): the middle of the range (S 60-140, V 10-40) where the tracker's error is smallest and flat; from
-S 180 frames are lost. 'tennis' is unchanged: on the real clips a lower V bound (60, 40) finds the same frames with
+S 180 frames are lost. 'red', 'green' and 'blue' took the same lower bounds (issue 51; they were S 120, 100, 120 and
+V 70, 60, 60): under the camera sweep's dimmer lights a box's shaded faces are at V 41-54, and without them the blob
+was the lit faces only, its centre up to 18 px high and its diameter 29 % small (``docs/floor-path.md``). 'tennis' is unchanged: on the real clips a lower V bound (60, 40) finds the same frames with
 the same blob (the ball is lit against a bright wall), and a lower S bound lets the table of one clip in."""
 
 CENTROIDS = ("weighted", "binary")

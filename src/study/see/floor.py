@@ -314,9 +314,13 @@ def _contact(t: np.ndarray, u: np.ndarray, v: np.ndarray, before: np.ndarray, af
     return tc, uc, vc
 
 
-EXTEND_PX = 1.5
+EXTEND_PX = 3.0
 """A frame after a flight still flies while its image row lies within this many pixels of the flight's parabola
-(the phases' curvature blurs a flight's last frames into the bounce)."""
+(the phases' curvature blurs a flight's last frames into the bounce). A tumbling box's centroid jitters by a pixel
+or two, which the parabola through a flight's last 5 frames carries further: at 1.5 px a fall at 30 frames a
+second was cut three frames early and a metre's drop read as landed (seed 2001's oblique_007). Chosen with
+:data:`SIZE_SD` on seed 2000's development clips, with the shaded faces tracked: 1.5 and 3.0 px gave 22.5 and 22.2
+mm."""
 CONTACT_SD = 0.5
 """A contact's centre height prior: the object's mean height at a contact (:func:`contact_height`: a box lands on an
 edge or a corner more often than on a face) with a spread of this share of its rest height. A cube's orientations
@@ -342,11 +346,13 @@ CONTACT_PX = 3.0
 itself is blurred over the frames between)."""
 TRACK_PX = 2.0
 """Beyond this many pixels a flight frame's misfit counts linearly, not squared (a tracker's jump)."""
-SIZE_SD = 0.1
+SIZE_SD = 0.3
 """The spread of a flight frame's depth from its apparent size (the focal length times the object's mean-silhouette
 diameter over the blob's, :func:`on_floor`) about the true depth times the clip's own bias, as a share: a tumbling
-box shows more or less than its mean silhouette (7.5 % in a median frame), and a blob of 15-60 pixels gains or loses
-an edge pixel from frame to frame."""
+box shows more or less than its mean silhouette (7.5 % in a median frame), a blob of 15-60 pixels gains or loses
+an edge pixel from frame to frame, and a small blob at 480p loses more. A weak measurement: on seed 2000's
+development clips, with the shaded faces tracked and :data:`EXTEND_PX` 3, spreads of 0.1, 0.2, 0.3 and 0.4 gave 24.0,
+22.4, 22.2 and 22.4 mm, and no size 23.6 (``docs/floor-path.md``)."""
 SIZE_BIAS = 0.3
 """The prior spread of a clip's bias in depth from apparent size, as a share (log): the blob's edge moves with the
 lighting, the floor behind and the video's resolution, -9 % to +14 % on 18 development clips (seed 2000), so the
