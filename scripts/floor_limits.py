@@ -5,9 +5,8 @@ Renders (or reads from the cache) ``--per-family`` clips of each camera family a
 seed than the sweep's own), then reads each clip's heights through the floor's camera from:
 
 - ``tracked``: the tracker's pixels and blob sizes, as a user's video gives them (the shipped path);
-- ``shaded``: the tracker run with every colour's lower bounds at S 100, V 25, the bounds issue 28 chose for
-  'orange' so that a box's faces turned from the light stay in its blob (the 'green', 'blue' and 'red' presets
-  keep V 60, which drops them: the blob's centre sits on the lit faces);
+- ``lit``: the tracker with the lower S and V bounds its presets had before issue 51 (:data:`LIT`), which drop a
+  box's faces turned from the light (V 41-54 under the sweep's dim lights): the blob's centre sits on the lit faces;
 - ``rendered``: the renderer's own pixel of each frame's centre (the truth CSV's ``u``, ``v``), the blob sizes
   still the tracker's;
 
@@ -32,15 +31,16 @@ from study.see.config import COLORS, TrackConfig
 from study.see.trajectory import Trajectory
 from study.simulate import synth
 
-SHADED_S, SHADED_V = 100, 25
-"""The lower saturation and value bounds of the ``shaded`` tracker (issue 28's for 'orange')."""
-PIXELS = ("tracked", "shaded", "rendered")
+LIT: dict[str, tuple[int, int]] = {"orange": (120, 80), "red": (120, 70), "green": (100, 60), "blue": (120, 60)}
+"""Each object colour's lower S and V bounds before its preset kept the shaded faces ('orange' until issue 28, the
+others until issue 51)."""
+PIXELS = ("tracked", "lit", "rendered")
 
 
-def shaded_config(colour: str) -> TrackConfig:
-    """The tracker's settings for ``colour`` with its lower S and V bounds at :data:`SHADED_S`, :data:`SHADED_V`."""
+def lit_config(colour: str) -> TrackConfig:
+    """The tracker's settings for ``colour`` with its lower S and V bounds at :data:`LIT`'s."""
     (h_lo, _, _), (h_hi, s_hi, v_hi) = COLORS[colour]
-    return TrackConfig(hsv=(h_lo, SHADED_S, SHADED_V, h_hi, s_hi, v_hi), progress=False)
+    return TrackConfig(hsv=(h_lo, *LIT[colour], h_hi, s_hi, v_hi), progress=False)
 
 
 def rendered(px: Trajectory, truth: dict[str, np.ndarray]) -> Trajectory:
@@ -84,7 +84,7 @@ def main() -> None:
         cells = []
         try:
             px = {"tracked": track.track_video(v.path, v.track_config()),
-                  "shaded": track.track_video(v.path, shaded_config(clip.shot.colour))}
+                  "lit": track.track_video(v.path, lit_config(clip.shot.colour))}
         except StudyError as e:
             rows.append(f"{v.path.name}: not tracked ({str(e)[:60]})")
             continue

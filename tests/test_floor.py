@@ -322,11 +322,13 @@ def test_a_contact_height_below_the_rest_height_is_refused_by_name():
         floor.on_floor(traj, marks(cam, path, 0.0), REST, contact_height=0.5 * REST)
 
 
-def test_floor_limits_script_lowers_only_a_presets_s_and_v_floor_and_swaps_in_the_renderers_pixels():
+def test_floor_limits_script_raises_only_a_presets_s_and_v_floor_and_swaps_in_the_renderers_pixels():
     limits = scripts_toys.script("scripts/floor_limits.py")
-    for colour, ((h_lo, _, _), (h_hi, s_hi, v_hi)) in COLORS.items():
-        lo, hi = limits.shaded_config(colour).bounds()
-        assert list(lo) == [h_lo, 100, 25] and list(hi) == [h_hi, s_hi, v_hi], colour
+    for colour in ("orange", "red", "green", "blue"):
+        (h_lo, s_lo, v_lo), (h_hi, s_hi, v_hi) = COLORS[colour]
+        lo, hi = limits.lit_config(colour).bounds()
+        assert list(lo) == [h_lo, *limits.LIT[colour]] and list(hi) == [h_hi, s_hi, v_hi], colour
+        assert lo[1] >= s_lo and lo[2] > v_lo, f"{colour}: the lit tracker drops more than the preset"
     t = np.arange(6) / 30
     frame = types.SimpleNamespace(width=640, height=360)
     px = _track(frame, t, np.column_stack([np.arange(6.0), 10 + np.arange(6.0)]), np.full(6, 20.0))

@@ -32,8 +32,9 @@ With the camera known, a frame's ray fixes the centre up to its depth, and the t
 A flight that never lands, and a centre placed where no throw could be, are left unknown.
 
 How well: the book's camera chapter measures the path on the camera sweep. On development clips of other seeds
-(``scripts/floor_limits.py``), it is 26-39 mm RMS with each clip's median removed; the renderer's own pixels without
-the apparent size give 18-23 mm. The tracker's pixels and blob sizes hold it back, more than this fit does.
+(``scripts/floor_limits.py``), it is 22-24 mm RMS with each clip's median removed; the renderer's own pixels give
+19.5-20.7 mm. What is left is this fit's, in the first flight (no contact before it) and in a box's tumble after
+its first landing.
 ``docs/floor-path.md`` keeps those measurements, what each setting here was chosen on, and what was tried and not
 kept.
 """
@@ -326,7 +327,7 @@ CONTACT_SD = 0.5
 edge or a corner more often than on a face) with a spread of this share of its rest height. A cube's orientations
 spread its contact height by 0.15 of its half-edge; the tracker's contact pixel and time add to it. On the 18
 development clips of seed 2000 (the module's measurements) spreads of 0.15, 0.25 and 0.5 gave 27.0, 26.3 and 25.6
-mm."""
+mm; with the shaded faces tracked (issue 51), 0.3, 0.5 and 0.8 gave 22.9, 22.2 and 22.0."""
 CONTACT_SINK = 0.15
 """The prior's spread below ``rest_height``, a share of it: a centre sinks below its resting height only as far as
 the object gives (a ball's squash), so a contact placed lower is held back more than one placed higher."""
