@@ -436,3 +436,23 @@ def test_the_overlay_joins_found_frames_within_a_piece_never_across_a_filled_gap
     mid_gap, mid_jump = last[60, 98], last[40, 207]  # halfway along where straight lines would run
     assert np.abs(mid_gap.astype(int) - 90).max() < 25 and np.abs(mid_jump.astype(int) - 90).max() < 25
     assert np.abs(last[60, 50].astype(int) - 90).max() > 60, "the found frames before the gap are joined"
+
+
+@pytest.mark.parametrize("colour, hue", [("orange", 12), ("red", 0), ("green", 65), ("blue", 115)])
+def test_each_object_preset_keeps_a_boxs_shaded_faces(tmp_path, colour, hue):
+    """A box of the colour, its upper half lit (V 200), its lower half turned from the light (V 45, as a box's faces
+    are under the camera sweep's dim lights): the preset keeps both, so the centre is the box's, not its lit half's
+    (4 px higher)."""
+    lit, shaded = (cv2.cvtColor(np.uint8([[[hue, 200, v]]]), cv2.COLOR_HSV2BGR)[0, 0].tolist() for v in (200, 45))
+    path = tmp_path / f"{colour}.mp4"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (160, 120))
+    for i in range(20):
+        f = np.full((120, 160, 3), 150, np.uint8)
+        u = 40 + 4 * i
+        f[52:60, u - 8:u + 8] = lit
+        f[60:68, u - 8:u + 8] = shaded
+        w.write(f)
+    w.release()
+    traj = track.track_video(path, track.TrackConfig(color=colour, progress=False))
+    assert traj.measured.all()
+    assert np.abs(traj.v - 59.5).max() < 1.0, traj.v  # the box's centre row; the lit half's is 55.5

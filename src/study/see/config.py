@@ -26,8 +26,10 @@ high at 4 m. S 100, V 25 were chosen on development renders (render seed 2000, 1
 never the book's): the middle of the range (S 60-140, V 10-40) where the tracker's error is smallest and flat; from
 S 180 frames are lost. 'red', 'green' and 'blue' took the same lower bounds (issue 51; they were S 120, 100, 120 and
 V 70, 60, 60): under the camera sweep's dimmer lights a box's shaded faces are at V 41-54, and without them the blob
-was the lit faces only, its centre up to 18 px high and its diameter 29 % small (``docs/floor-path.md``). 'tennis' is unchanged: on the real clips a lower V bound (60, 40) finds the same frames with
-the same blob (the ball is lit against a bright wall), and a lower S bound lets the table of one clip in."""
+was the lit faces only, its centre up to 18 px high and its diameter 29 % small (``docs/floor-path.md``).
+
+'tennis' is unchanged: on the real clips a lower V bound (60, 40) finds the same frames with the same blob (the ball
+is lit against a bright wall), and a lower S bound lets the table of one clip in."""
 
 CENTROIDS = ("weighted", "binary")
 """How a blob's position is measured (:attr:`TrackConfig.centroid`)."""
