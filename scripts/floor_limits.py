@@ -11,7 +11,8 @@ seed than the sweep's own), then reads each clip's heights through the floor's c
   still the tracker's;
 
 each with the apparent size and without it (``size=None``). Prints each way's RMS height error with each clip's
-median removed, pooled over frames and by camera family, millimetres; ``--clips`` adds a row per clip::
+median removed, pooled over frames, by camera family and by frame height, millimetres; ``--clips`` adds a row per
+clip::
 
     .venv/bin/python scripts/floor_limits.py --per-family 3 --seed 2001 --out /tmp/floor-dev3
 """
@@ -97,7 +98,7 @@ def main() -> None:
             except StudyError as err:
                 cells.append(f"{type(err).__name__}")
                 continue
-            for g in ("all", clip.shot.family):
+            for g in ("all", clip.shot.family, f"{clip.shot.height_px}p"):
                 table[w].setdefault(g, []).append(e)
             cells.append(f"{centred_mm([e]):.0f}")
         rows.append(f"{v.path.name} {clip.shot.height_px}p: " + " | ".join(cells))
