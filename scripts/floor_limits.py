@@ -26,13 +26,14 @@ from pathlib import Path
 import numpy as np
 
 from study.core.errors import StudyError
-from study.methods import camera_cost, sweep
+from study.methods import camera_cost, sweep, tracker
 from study.see import floor, render, track
 from study.see.config import COLORS, TrackConfig
 from study.see.trajectory import Trajectory
 from study.simulate import synth
 
-LIT: dict[str, tuple[int, int]] = {"orange": (120, 80), "red": (120, 70), "green": (100, 60), "blue": (120, 60)}
+LIT: dict[str, tuple[int, ...]] = {"orange": tracker.TRACKERS["before"].hsv[1:3], "red": (120, 70), "green": (100, 60),
+                                   "blue": (120, 60)}
 """Each object colour's lower S and V bounds before its preset kept the shaded faces ('orange' until issue 28, the
 others until issue 51)."""
 PIXELS = ("tracked", "lit", "rendered")
@@ -98,10 +99,10 @@ def main() -> None:
             except StudyError as err:
                 cells.append(f"{type(err).__name__}")
                 continue
-            for g in ("all", clip.shot.family, f"{clip.shot.height_px}p"):
+            for g in camera_cost.groups_of(clip):
                 table[w].setdefault(g, []).append(e)
             cells.append(f"{centred_mm([e]):.0f}")
-        rows.append(f"{v.path.name} {clip.shot.height_px}p: " + " | ".join(cells))
+        rows.append(f"{v.path.name} {camera_cost.resolution(clip)}: " + " | ".join(cells))
     names = [f"{p}{'' if s else ' no size'}" for p, s in ways]
     if a.clips:
         print("clip: " + " | ".join(names))
