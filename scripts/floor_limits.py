@@ -11,8 +11,8 @@ seed than the sweep's own), then reads each clip's heights through the floor's c
   still the tracker's;
 
 each with the apparent size and without it (``size=None``). Prints each way's RMS height error with each clip's
-median removed, pooled over frames, by camera family and by frame height, millimetres; ``--clips`` adds a row per
-clip::
+median removed (and plain, in brackets), pooled over frames, by camera family and by frame height, millimetres, and
+how many clips each way gave heights for; ``--clips`` adds a row per clip::
 
     .venv/bin/python scripts/floor_limits.py --per-family 3 --seed 2001 --out /tmp/floor-dev3
 """
@@ -107,9 +107,11 @@ def main() -> None:
     if a.clips:
         print("clip: " + " | ".join(names))
         print("\n".join(rows))
-    print("group: " + " | ".join(names) + " (RMS mm, each clip's median removed)")
+    print("group: " + " | ".join(names) + " (RMS mm, each clip's median removed; plain in brackets)")
     for g in table[ways[0]]:
-        print(f"{g}: " + " | ".join(f"{centred_mm(table[w].get(g, [])):.1f}" for w in ways))
+        print(f"{g}: " + " | ".join("{1:.1f} ({0:.1f})".format(*camera_cost.rms_mm(table[w].get(g, []))) for w in ways))
+    print(f"clips with heights, of {len(clips)}: " + " | ".join(str(sum(len(e) > 0 for e in table[w].get("all", [])))
+                                                             for w in ways))
 
 
 if __name__ == "__main__":
