@@ -70,8 +70,10 @@ def centred_mm(parts: list[np.ndarray]) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--per-family", type=int, default=3, help="clips of each camera family (default 3)")
-    ap.add_argument("--seed", type=int, default=2001, help="seed of the throws and shots (default 2001: not the sweep's)")
-    ap.add_argument("--out", type=Path, default=Path("/tmp/floor-limits"), help="where the clips are rendered and cached")
+    ap.add_argument("--seed", type=int, default=2001,
+                    help="seed of the throws and shots (default 2001: not the sweep's)")
+    ap.add_argument("--out", type=Path, default=Path("/tmp/floor-limits"),
+                    help="where the clips are rendered and cached")
     ap.add_argument("--clips", action="store_true", help="also print a row per clip")
     a = ap.parse_args()
     cfg = synth.SynthConfig.preset("paper")
