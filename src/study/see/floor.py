@@ -18,7 +18,10 @@ With the camera known, a frame's ray fixes the centre up to its depth, and the t
   are fitted at once to the flights' pixels, each contact's pixel and time, and a prior that a contact's centre is
   near the object's mean height at a contact (:func:`contact_height`: a cube tumbling lands with its centre 1.5
   half-edges up on average; spread :data:`CONTACT_SD`), and sinks below
-  ``rest_height`` only as far as the object squashes (:data:`CONTACT_SINK`);
+  ``rest_height`` only as far as the object squashes (:data:`CONTACT_SINK`). The fit gives each flight frame its
+  depth; the frame's point is on its own pixel's ray at that depth (:func:`_on_rays`), so what the pixels saw off
+  the drag-free arc stays in the heights. Since the arcs' curvature sets their depth at g, a light box's slower
+  fall (the drag cue) still reads as g;
 - **the apparent size**, a weak extra measurement of a flight frame's depth: the focal length times the object's
   mean-silhouette diameter over the blob's (:data:`SIZE_SD`), up to one bias for the whole clip that the fit finds
   (:data:`SIZE_BIAS`). It holds a flight's depth where its pixels do not: a camera low over the floor, a tracker's
@@ -32,9 +35,9 @@ With the camera known, a frame's ray fixes the centre up to its depth, and the t
 A flight that never lands, and a centre placed where no throw could be, are left unknown.
 
 How well: the book's camera chapter measures the path on the camera sweep. On development clips of other seeds
-(``scripts/floor_limits.py``), it is 22-24 mm RMS with each clip's median removed; the renderer's own pixels give
-19.5-20.7 mm. What is left is this fit's, in the first flight (no contact before it) and in a box's tumble after
-its first landing.
+(seeds 2000-2002: ``docs/floor-path.md``), it is 20-22 mm RMS with each clip's
+median removed; the renderer's own pixels give 19-21 mm. What is left is this fit's, in the first flight (no
+contact before it) and in a box's tumble after its first landing.
 ``docs/floor-path.md`` keeps those measurements, what each setting here was chosen on, and what was tried and not
 kept.
 """
@@ -552,13 +555,24 @@ def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_he
     if flights:
         for (_, _, frames), xyz in zip(flights, _joint(camera, t, u, v, flights, contacts, rest_height, contact_height,
                                                              sized)):
-            out[frames] = xyz
+            out[frames] = _on_rays(camera, u[frames], v[frames], xyz)
     near = _near_envelope(camera, t, plane, ground)
     out[ground] = _median5(np.where(ground[:, None], near, np.nan))[ground]
     lost = ~(np.isfinite(u) & np.isfinite(v))
     far = np.linalg.norm(out[:, :2] - np.asarray(camera.position[:2]), axis=1) > MAX_DISTANCE
     out[lost | far | (out[:, 2] < 0.0) | (out[:, 2] > MAX_HEIGHT)] = np.nan  # not a place a throw could be: unknown
     return out, ground
+
+
+def _on_rays(camera: Camera, u: np.ndarray, v: np.ndarray, fitted: np.ndarray) -> np.ndarray:
+    """(n, 3) metres: each frame's point on its own pixel's ray (``u``, ``v`` (n,) pixels) at the depth of its
+    ``fitted`` (n, 3) arc point; the arc point itself where the pixel is unknown. The arc is drag-free at g, so its
+    own points would replace what the pixels saw between contacts (a tumbling box's centroid, a light box's slower
+    fall) with the model; taken at the arc's depth, the pixels keep their shape."""
+    seen = np.isfinite(u) & np.isfinite(v) & np.isfinite(fitted).all(axis=1)
+    out = np.array(fitted, np.float64)
+    out[seen] = np.asarray(camera.position) + camera.depth_of(fitted[seen])[:, None] * camera.rays(u[seen], v[seen])
+    return out
 
 
 def _near_envelope(camera: Camera, t: np.ndarray, plane: np.ndarray, ground: np.ndarray) -> np.ndarray:
