@@ -35,9 +35,9 @@ With the camera known, a frame's ray fixes the centre up to its depth, and the t
 A flight that never lands, and a centre placed where no throw could be, are left unknown.
 
 How well: the book's camera chapter measures the path on the camera sweep. On development clips of other seeds
-(seeds 2000-2002: ``docs/floor-path.md``), it is 20-22 mm RMS with each clip's
-median removed; the renderer's own pixels give 19-21 mm. What is left is this fit's, in the first flight (no
-contact before it) and in a box's tumble after its first landing.
+(seeds 2000-2002: ``docs/floor-path.md``), it is 20-22 mm RMS with each clip's median removed; the renderer's own
+pixels give 19-21 mm. What is left is this fit's, in the first flight (no contact before it) and in a box's tumble
+after its first landing.
 ``docs/floor-path.md`` keeps those measurements, what each setting here was chosen on, and what was tried and not
 kept.
 """
@@ -567,8 +567,8 @@ def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_he
 def _on_rays(camera: Camera, u: np.ndarray, v: np.ndarray, fitted: np.ndarray) -> np.ndarray:
     """(n, 3) metres: each frame's point on its own pixel's ray (``u``, ``v`` (n,) pixels) at the depth of its
     ``fitted`` (n, 3) arc point; the arc point itself where the pixel is unknown. The arc is drag-free at g, so its
-    own points would replace what the pixels saw between contacts (a tumbling box's centroid, a light box's slower
-    fall) with the model; taken at the arc's depth, the pixels keep their shape."""
+    own points would replace what the pixels saw between contacts (a tumbling box's centroid off its arc) with the
+    model; taken at the arc's depth, the pixels keep their shape."""
     seen = np.isfinite(u) & np.isfinite(v) & np.isfinite(fitted).all(axis=1)
     out = np.array(fitted, np.float64)
     out[seen] = np.asarray(camera.position) + camera.depth_of(fitted[seen])[:, None] * camera.rays(u[seen], v[seen])
