@@ -342,7 +342,7 @@ def test_floor_limits_script_raises_only_a_presets_s_and_v_floor_and_swaps_in_th
 
 def test_a_flights_heights_follow_its_own_pixels_at_the_fitted_depth_not_the_drag_free_arc():
     """The joint fit gives each flight frame's depth, and the frame's own pixel gives its point: a centre that
-    wobbles about its arc (a tumbling box's centroid, a light box's slower fall) is followed, where the arc's own
+    wobbles about its arc (a tumbling box's centroid) is followed, where the arc's own
     points would smooth it away."""
     t, path = tumbling_throw()
     cam = scene(1.0, 5.0, 0.0, path)

@@ -566,13 +566,10 @@ def centres(camera: Camera, t: np.ndarray, u: np.ndarray, v: np.ndarray, rest_he
 
 def _on_rays(camera: Camera, u: np.ndarray, v: np.ndarray, fitted: np.ndarray) -> np.ndarray:
     """(n, 3) metres: each frame's point on its own pixel's ray (``u``, ``v`` (n,) pixels) at the depth of its
-    ``fitted`` (n, 3) arc point; the arc point itself where the pixel is unknown. The arc is drag-free at g, so its
-    own points would replace what the pixels saw between contacts (a tumbling box's centroid off its arc) with the
-    model; taken at the arc's depth, the pixels keep their shape."""
-    seen = np.isfinite(u) & np.isfinite(v) & np.isfinite(fitted).all(axis=1)
-    out = np.array(fitted, np.float64)
-    out[seen] = np.asarray(camera.position) + camera.depth_of(fitted[seen])[:, None] * camera.rays(u[seen], v[seen])
-    return out
+    ``fitted`` (n, 3) arc point; NaN where the pixel is unknown (:func:`centres` leaves those frames unknown). The
+    arc is drag-free at g, so its own points would replace what the pixels saw between contacts (a tumbling box's
+    centroid off its arc) with the model; taken at the arc's depth, the pixels keep their shape."""
+    return np.asarray(camera.position) + camera.depth_of(fitted)[:, None] * camera.rays(u, v)
 
 
 def _near_envelope(camera: Camera, t: np.ndarray, plane: np.ndarray, ground: np.ndarray) -> np.ndarray:
