@@ -295,6 +295,8 @@ def test_only_executes_the_named_chapter_and_says_so_on_a_chapter_never_executed
     page = nbformat.read(executed(tiny, "alpha"), as_version=4)
     assert [c.cell_type for c in page.cells] == ["markdown"] and "Not executed in this build" in page.cells[0].source
     assert page.cells[0].source.startswith("# "), "the page keeps its title for the table of contents"
+    table = book.timings_table(timings)
+    assert "alpha  not executed" in table and "cached" not in table, "the build's last table does not call it cached"
     assert ran(book.execute(tiny, "paper")) == {"alpha"}, "the next full build executes it"
 
 

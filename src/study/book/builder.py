@@ -700,6 +700,8 @@ def timings_table(timings: dict[str, dict[str, Any]], runs: dict[str, float] | N
             what = "page (copied)"
         elif t.get("failed"):
             what = f"FAILED after {_duration(t['seconds'])}"
+        elif t.get("absent"):
+            what = "not executed (not in --only; never executed before)"
         elif t["cached"]:
             what = f"cached (took {_duration(t['seconds'])} when executed)" + (", out of date" if t.get("stale") else "")
         else:
