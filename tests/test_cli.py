@@ -220,7 +220,7 @@ def test_classify_without_a_model_uses_the_builds_recommended_one(tmp_path, data
     said = capsys.readouterr()
     assert said.out.startswith(f"{csv}: cannot tell (p(heavy) = "), said.out
     assert "trust: 64.2 % [52.9, 75.0] right (the camera sweep of the smoke build" in said.out
-    assert "cannot tell for p(heavy) 0.00-1.00" in said.out
+    assert "cannot tell for p(heavy) 0.000-1.000" in said.out
     assert "trained on exact trajectories" in said.err and "64.2 % [52.9, 75.0]" in said.err, said.err
     import shutil
 

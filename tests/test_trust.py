@@ -38,7 +38,12 @@ def test_an_answer_inside_the_band_is_cannot_tell_and_outside_it_the_likelier_cl
     assert [t.label(p) for p in (0.29, 0.3, 0.5, 0.7, 0.71)] == ["light", *[trust.CANNOT_TELL] * 3, "heavy"]
     assert trust.Trust(IV, "test").label(0.51) == "heavy" and trust.Trust(IV, "test").label(0.5) == "light"  # heavy above 1/2
     said = str(t)
-    assert said.startswith("64.2 % [52.9, 75.0] right (test)") and "cannot tell for p(heavy) 0.30-0.70" in said
+    assert said.startswith("64.2 % [52.9, 75.0] right (test)") and "cannot tell for p(heavy) 0.300-0.700" in said
+
+
+def test_the_band_is_printed_as_finely_as_the_answer_so_an_answer_inside_it_reads_inside_it():
+    t = trust.Trust(IV, "test", (0.19701, 0.8155))  # the paper build's floor band at fe15f1e; an answer said 0.198
+    assert t.label(0.198) == trust.CANNOT_TELL and "cannot tell for p(heavy) 0.197-0.816" in str(t)
 
 
 def _rec(measured):

@@ -53,7 +53,7 @@ class Trust:
     def __str__(self) -> str:
         acc = "not measured" if self.accuracy is None else f"{pct_ci(self.accuracy)} right"
         band = ("" if self.band is None else
-                f"; cannot tell for p(heavy) {self.band[0]:.2f}-{self.band[1]:.2f}")
+                f"; cannot tell for p(heavy) {self.band[0]:.3f}-{self.band[1]:.3f}")  # as p(heavy) is printed
         return f"{acc} ({self.source}){band}"
 
 
