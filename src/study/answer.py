@@ -29,7 +29,7 @@ from study.see.paths import FLOOR_KEYS
 from study.see.scale import DEFAULT, SCALE_FROM, ObjectShape, read_scale
 from study.see.trajectory import Trajectory
 from study.see.video import probe
-from study.trust import CANNOT_TELL, Measurements, Trust, exact_warning, for_answer, measurements, path_of
+from study.trust import CANNOT_TELL, Measurements, Trust, exact_warning, for_answer, measurements, p_text, path_of
 
 TENNIS_BALL = ObjectShape("sphere", (0.067,))
 """A tennis ball, 6.7 cm across."""
@@ -97,7 +97,7 @@ class Answer:
         (``warnings``) a line per warning (the command line prints those apart, on the error stream)."""
         trust = "" if self.trust is None else f"\n  trust: {self.trust}"
         warned = "".join(f"\n  warning: {w}" for w in self.warnings) if warnings else ""
-        return (f"{self.source}: {self.label} (p(heavy) = {self.p_heavy:.3f}; {self.model}){trust}\n"
+        return (f"{self.source}: {self.label} (p(heavy) = {p_text(self.p_heavy)}; {self.model}){trust}\n"
                 f"  assumed: {self.assumed}{warned}")
 
     def __str__(self) -> str:

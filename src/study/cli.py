@@ -546,8 +546,10 @@ def _classify_manifest(a: argparse.Namespace) -> int:
                                     scale_from=a.scale_from, data_dir=a.data_dir, what="--manifest", floor=a.floor)
     for w in next((r.answer.warnings for r in rows if r.answer), ()):  # one model answered them all
         _warn(w)
+    from study.trust import p_text
+
     for r in rows:
-        got = (f"{r.answer.label} (p(heavy) = {r.answer.p_heavy:.3f})" if r.answer else f"not classified: {r.error}")
+        got = (f"{r.answer.label} (p(heavy) = {p_text(r.answer.p_heavy)})" if r.answer else f"not classified: {r.error}")
         mark = {True: "  right", False: "  wrong", None: ""}[r.correct]
         print(f"{r.file}: {got}" + (f"; true {r.true}{mark}" if r.true else ""))
     known = [r.correct for r in rows if r.correct is not None]

@@ -53,8 +53,14 @@ class Trust:
     def __str__(self) -> str:
         acc = "not measured" if self.accuracy is None else f"{pct_ci(self.accuracy)} right"
         band = ("" if self.band is None else
-                f"; cannot tell for p(heavy) {self.band[0]:.3f}-{self.band[1]:.3f}")  # as p(heavy) is printed
+                f"; cannot tell for p(heavy) {p_text(self.band[0])}-{p_text(self.band[1])}")
         return f"{acc} ({self.source}){band}"
+
+
+def p_text(p: float) -> str:
+    """A probability as every answer prints it (the band's edges and p(heavy) alike, so one inside the band reads
+    inside it)."""
+    return f"{p:.3f}"
 
 
 def _words(path: str) -> str | None:
