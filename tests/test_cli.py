@@ -3,6 +3,7 @@ with one line naming the path, exits 2 and leaves nothing behind; `--help` costs
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
 import shutil
@@ -295,6 +296,18 @@ def test_classify_reports_the_missing_video_and_the_missing_size_before_the_mode
 def test_the_commands_help_names_the_video_path():
     text = " ".join(cli.build_parser().format_help().split())
     assert "study track VIDEO" in text and "study classify VIDEO --color C --object-size D" in text
+
+
+def test_an_options_help_names_the_other_options_by_their_flags():
+    """The config's docstrings name fields (``observe_noise``); the command line's help names them as a user types
+    them, and keeps any other literal a quoted word."""
+    parser = cli.build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+    train = " ".join(commands["train"].format_help().split())
+    assert "(--observe-noise and the fields after it" in train and "a quarter of --patience epochs" in train
+    assert "'cosine'" in train and "'observe_noise'" not in train
+    assert "ignored when --hsv is given" in " ".join(commands["track"].format_help().split())
+    assert all("``" not in (a.help or "") for c in commands.values() for a in c._actions)
 
 
 def test_train_help_puts_the_few_options_a_user_needs_first(capsys):

@@ -22,8 +22,23 @@ from study.see import paths
 
 
 def _plain(doc: str) -> str:
-    """A docstring as ``--help`` text: reST roles and literals as plain words, ``%`` escaped for argparse."""
-    return re.sub(r":\w+:`~?([^`]*)`", r"\1", doc).replace("``", "'").replace("%", "%%")
+    """A docstring as ``--help`` text: reST roles as plain words, ``%`` escaped for argparse; its literals are left
+    for :func:`_name_flags`."""
+    return re.sub(r":\w+:`~?([^`]*)`", r"\1", doc).replace("%", "%%")
+
+
+def _name_flags(parser: argparse.ArgumentParser) -> None:
+    """Rewrite the help of every option of ``parser`` in the command's own terms: a literal that names another of
+    its options becomes that flag (``observe_noise`` -> --observe-noise), any other literal a quoted word."""
+    flags = {s for a in parser._actions for s in a.option_strings}
+
+    def word(m: re.Match) -> str:
+        flag = "--" + m[1].replace("_", "-")
+        return flag if flag in flags else f"'{m[1]}'"
+
+    for action in parser._actions:
+        if action.help:
+            action.help = re.sub(r"``(.+?)``", word, action.help)
 
 
 def _lower(text: str) -> str:
@@ -633,6 +648,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=_Parser)
     for add in COMMANDS:
         add(sub)
+    for command in sub.choices.values():
+        _name_flags(command)
     return parser
 
 

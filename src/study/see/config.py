@@ -46,7 +46,7 @@ class TrackConfig:
     """
 
     color: str = "tennis"
-    """Name of a colour in :data:`COLORS`, in any case (ignored when ``hsv`` is given)."""
+    """The name of a colour preset (:data:`COLORS`, each an HSV range), in any case; ignored when ``hsv`` is given."""
     hsv: tuple[int, int, int, int, int, int] | None = None
     """Explicit HSV bounds (H, S, V low, then H, S, V high), OpenCV scale; overrides ``color``."""
     min_area: int = 4
