@@ -21,9 +21,11 @@ def _iv(v: float, lo: float | None = None, hi: float | None = None) -> Interval:
     return Interval(v, v - 0.05 if lo is None else lo, v + 0.05 if hi is None else hi, "bootstrap")
 
 
-def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> usercamera.CameraSweep:
+def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None,
+           drag_above: tuple[str, ...] = ()) -> usercamera.CameraSweep:
     """A camera sweep of two families made up here: exact 0.8 everywhere; every path but gravity (the default among
-    them) 0.6, 0.7 on 'low' and 0.5 on 'high'; 'gravity' ``best_path_gain`` above it; 10 clips a family."""
+    them) 0.6, 0.7 on 'low' and 0.5 on 'high'; 'gravity' ``best_path_gain`` above it; 10 clips a family. The drag
+    rule at chance on every path, or at ``drag_rest`` on all of them, or above chance on the paths ``drag_above``."""
     fams = ("low", "high")
     clips = tuple(SimpleNamespace(shot=SimpleNamespace(family=f, distance=4.0, height_px=480 if i < 7 else 720))
                   for f in fams for i in range(10))
@@ -43,6 +45,7 @@ def _sweep(best_path_gain: float = 0.02, drag_rest: Interval | None = None) -> u
     drag = {"exact": _iv(0.75), **{k: _iv(0.5, 0.4, 0.6) for k in camera_cost.PATHS}}
     if drag_rest is not None:
         drag = {k: drag_rest if k != "exact" else v for k, v in drag.items()}
+    drag.update({k: _iv(0.9) for k in drag_above})
     return usercamera.CameraSweep(clips, {"velocity, randomised": m, "velocity, exact": m}, "velocity, randomised",
                                   {"velocity, randomised": "velocity-randomised", "velocity, exact": "velocity-exact"},
                                   floors, drag, 0.075, (600.0, 330.0, len(clips)))
@@ -98,6 +101,8 @@ def test_the_camera_sweeps_numbers_read_back_and_its_sentences_follow_them(tmp_p
     clear = _result(_sweep(best_path_gain=0.5, drag_rest=_iv(0.9)))
     assert "interval clear of 0" in clear.default_words and "should default to it" in clear.default_words
     assert "survives every path" in clear.drag_words
+    one_scale = _result(_sweep(drag_above=("mean silhouette",))).drag_words  # the smoke build's case
+    assert "it survives only the mean silhouette path: on rest size," in one_scale and "does not survive" not in one_scale
     said = summary.Findings._user_camera.fget(SimpleNamespace(sweep=n.sweep))  # the summary's sentence
     assert said.startswith(" A camera nobody measured leaves less still: on 20 clips") and "(heights off by 100 mm" in said
     assert summary.Findings._user_camera.fget(SimpleNamespace(sweep=None)) == ""
