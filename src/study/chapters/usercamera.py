@@ -294,12 +294,13 @@ class UserCamera:
         default = camera_cost.DEFAULT_PATH
         at_chance = [k for k in camera_cost.PATHS if d[k].lo <= 0.5]
         kept = [k for k in camera_cost.PATHS if k not in at_chance]
+        chance = f": on {', '.join(at_chance)} heights the rule's interval holds chance"
         if not at_chance:
             verdict = "it survives every path (each interval above chance)"
+        elif not kept:
+            verdict = "it does not survive" + chance
         else:
-            verdict = ((f"it survives only the {', '.join(kept)} path{'s' if len(kept) > 1 else ''}" if kept
-                        else "it does not survive") + ": on " + ", ".join(at_chance)
-                       + " heights the rule's interval holds chance")
+            verdict = f"it survives only the {', '.join(kept)} path{'s' if len(kept) > 1 else ''}" + chance
         return (f"the drag rule (one threshold on the first fall's acceleration, set on the training throws) gets "
                 f"{pct_ci(d['exact'])} of the sweep's throws from their exact heights and {pct_ci(d[default])} "
                 f"from the {default} path; {verdict}")
