@@ -1,13 +1,18 @@
 """The camera sweep (study.methods.sweep): shots drawn in their family's ranges, the camera put into the scene as
 the code's pinhole sees it, and a smoke sweep rendered and cached."""
 
+import dataclasses
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from study.core import cache
 from study.core.errors import ConfigError
-from study.methods import camera_cost, sweep, videos
+from study.methods import camera_cost, sweep, tracked, videos
 from study.see import render
 from study.simulate import measure as motion
+from study.see.trajectory import Trajectory
 from study.simulate import synth
 
 
@@ -220,3 +225,59 @@ def test_a_path_that_answers_fewer_clips_is_trusted_on_those_it_answered():
     assert found.answered.value == 0.5, "an answer the path gave is right as often as the model is"
     missing[camera_cost.FOUND][:] = True
     assert camera_cost.measure([_Says(True)], clips, tracked, (x, missing)).results["all"][camera_cost.FOUND].answered is None
+
+
+def _same(a: list[camera_cost.Heights], b: list[camera_cost.Heights]) -> None:
+    """Two lists of heights equal to the bit: every array's dtype, shape and bytes, every other field's value."""
+
+    def bits(x, y, what):
+        if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+            assert (x.dtype, x.shape, x.tobytes()) == (y.dtype, y.shape, y.tobytes()), what
+        else:
+            assert type(x) is type(y) and (x == y or x != x and y != y), what  # NaN equals NaN here
+
+    assert len(a) == len(b)
+    for i, (h, k) in enumerate(zip(a, b)):
+        bits(h.exact, k.exact, f"clip {i} exact")
+        assert list(h.paths) == list(k.paths) and list(h.tracks) == list(k.tracks)
+        for name in h.paths:
+            bits(h.paths[name], k.paths[name], f"clip {i} path {name}")
+        for name in h.tracks:
+            for f in dataclasses.fields(Trajectory):
+                bits(getattr(h.tracks[name], f.name), getattr(k.tracks[name], f.name), f"clip {i} {name}.{f.name}")
+
+
+def test_kept_heights_read_back_as_written(tmp_path):
+    n = 5
+    ramp = np.linspace(0.0, 1.0, n)
+    traj = Trajectory(t=ramp, u=ramp * 3, v=np.full(n, np.nan), status=np.ones(n, np.int8),
+                      segment=np.zeros(n, np.int32), confidence=ramp, diameter=ramp + 1, fps=np.float64(60.0),
+                      source=Path("clip.mp4"), width=np.int64(640), height_px=360, ground_v=np.nan,
+                      height_per_pixel=0.01, units="m", z=None, ground_z=0.1)
+    h = camera_cost.Heights(ramp.astype(np.float32), {"floor marks": ramp, "floor marks found": "no marks found"},
+                            {"floor marks": traj, "known camera": dataclasses.replace(traj, z=ramp)})
+    tracked.write(h, tmp_path / "h.npz")
+    back = tracked.read(tmp_path / "h.npz")
+    assert back.tracks["floor marks"].width == 640 and back.tracks["floor marks"].source == Path("clip.mp4")
+    for t in h.tracks.values():  # numpy scalars come back as Python numbers of the same value
+        t.fps, t.width = 60.0, 640
+    _same([h], [back])
+
+
+@pytest.mark.slow
+def test_the_kept_heights_are_the_plain_loops_to_the_bit_and_read_back_without_tracking(smoke, monkeypatch):
+    cfg, clips, _ = smoke
+    shape = camera_cost.shape_of(cfg)
+    plain = camera_cost.track_clips(clips, shape, progress=False)
+    _same(plain, tracked.track_clips(clips, shape, progress=False))  # tracked now, kept, read back
+
+    def tracks_again(*args, **kwargs):
+        raise AssertionError("a kept clip was tracked again")
+
+    with monkeypatch.context() as m:
+        m.setattr(camera_cost, "heights", tracks_again)
+        _same(plain, tracked.track_clips(clips, shape, progress=False))
+    bad = tracked.entry(clips[0], shape, cache.source_hash(*cache.closure("study.methods.tracked")))
+    bad.write_bytes(b"cut short")  # an entry that cannot be read is made again
+    _same(plain, tracked.track_clips(clips, shape, progress=False))
+    assert tracked.read(bad).paths.keys() == plain[0].paths.keys()

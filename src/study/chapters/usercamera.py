@@ -23,6 +23,7 @@ from study.learn.metrics import Interval
 from study.methods import camera_cost, floor_model, sweep
 from study.methods.floor_model import FloorFit
 from study.methods.recommend import Recommendation, kind, recommend
+from study.methods.tracked import track_clips
 from study.report.reported import count, number
 from study.report.text import Table, pct, pct_ci, points
 from study.report.usercamera import FloorModel, Numbers, Sweep, SweepGroup, SweepKey, SweepPath
@@ -88,7 +89,7 @@ def camera_sweep(runner: Runner, rec: Recommendation, progress: bool = False) ->
                             out_dir=runner.data_dir / "realworld", progress=progress,
                             frame_scale=p.sweep_frame_scale, duration=p.length)
     shape = camera_cost.shape_of(cfg)
-    tracked = camera_cost.track_clips(clips, shape, progress=progress)
+    tracked = track_clips(clips, shape, progress=progress)  # tracked once, then read back from the cache
     reads: dict[tuple[float, int], tuple[dict[str, np.ndarray], dict[str, np.ndarray]]] = {}
 
     def read(m: train.TrainedModel) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:  # the candidates share one input
