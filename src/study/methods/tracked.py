@@ -1,7 +1,7 @@
 """The camera sweep's clips tracked once and kept: each clip's heights by every path (``camera_cost.heights``), on
 disk beside the clip.
 
-Tracking the paper preset's 80 clips by every path takes about 38 minutes of one core (the floor path's joint fits),
+Tracking the paper preset's 80 clips by every path took about 38 minutes in a paper build (the floor path's joint fits),
 and the camera page executes again for any change to the package; with this cache it reads them back in seconds.
 An entry is keyed by the clip (its video's and ground truth's bytes, its shot, its colour, its rest height), the
 object's shape and the code that tracks (the closure of this module), written atomically and read back in the same
