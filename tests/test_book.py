@@ -194,6 +194,27 @@ def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root
 
 
+# runs after every other chapter (its front matter says so) and checks that beta's key is already on disk.
+LAST = HEADER.rstrip("\n").removesuffix("---") + "study:\n  execute: last\n---\n" + """
+# Last
+
+```{code-cell} ipython3
+from pathlib import Path
+
+assert Path("_build/executed/book/beta.key.json").is_file(), "beta's key is not written yet"
+```
+"""
+
+
+@pytest.mark.slow
+def test_a_chapters_key_is_written_as_it_ends_so_a_build_killed_later_keeps_it(tmp_path: Path) -> None:
+    """A build killed at a session's end never reaches its last step; the chapters it executed are not lost."""
+    toc = TOC.replace("  - file: book/notes\n", "  - file: book/last\n")
+    root = write_book(tmp_path, {"alpha": ALPHA, "beta": BETA, "last": LAST}, toc)
+    (root / "inputs.txt").write_text("first\n")
+    book.build(root, "smoke", force=False, only=None, html=False)  # 'last' runs after beta and finds its key
+
+
 @pytest.mark.slow
 def test_chapters_run_in_the_root_and_the_build_never_moves_the_process(tmp_path: Path,
                                                                          monkeypatch: pytest.MonkeyPatch) -> None:

@@ -518,8 +518,10 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         if {ch.stem for ch, *_ in done} & RECOMMENDING:
             steps["recommended model"] = _recommend(preset, cache_dir(root, data_dir), device, _sweep_measured(root))
     finally:
-        # Keys last, once every chapter of this run has written what it writes: a chapter whose
-        # input folder a later chapter adds to is not re-executed next time for that reason alone.
+        # Keys again, once every chapter of this run has written what it writes: a chapter whose input folder a
+        # later chapter adds to is not re-executed next time for that reason alone. Each was also written as its
+        # chapter ended (but those the recommended model is made from), so a build killed before this point (a
+        # session's end) executes again only those and what it had not done.
         for ch, base, parameters, seconds in done:
             _write_key(ch, base, parameters, root, seconds)
         if timings:
@@ -652,6 +654,8 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
                     outcome, seconds = f.result()
                     if outcome == "executed":
                         done.append((ch, info["base"], info["parameters"], seconds))
+                        if ch.stem not in RECOMMENDING:  # theirs wait for the recommended model made from them
+                            _write_key(ch, info["base"], info["parameters"], root, seconds)  # a killed build keeps it
                         timings[ch.stem] = {**timings.get(ch.stem, {}), "seconds": round(seconds, 3), "cached": False}
                         tqdm.write(f"{where}: executed in {_duration(seconds)}", file=sys.stderr)
                         continue
