@@ -216,6 +216,20 @@ def test_a_chapters_key_is_written_as_it_ends_so_a_build_killed_later_keeps_it(t
 
 
 @pytest.mark.slow
+def test_a_build_stopped_before_the_recommended_model_leaves_its_chapters_unkeyed(tmp_path: Path) -> None:
+    """The chapters the recommended model is made from (here a stand-in named 'usercamera') get their key only once
+    the model is made: a build that stops before (here a chapter that fails last) must make it next time."""
+    failing = BAD.replace("---\n\n", "study:\n  execute: last\n---\n\n", 1)
+    toc = "format: jb-book\nroot: book/beta\nchapters:\n  - file: book/usercamera\n  - file: book/bad\n"
+    root = write_book(tmp_path, {"beta": BETA, "usercamera": BETA, "bad": failing}, toc)
+    with pytest.raises(ChapterError):
+        book.build(root, "smoke", force=False, only=None, html=False)
+    keys = root / "_build" / "executed" / "book"
+    assert (keys / "beta.key.json").is_file() and executed(root, "usercamera").is_file()
+    assert not (keys / "usercamera.key.json").exists(), "cached next time, the recommended model would never be made"
+
+
+@pytest.mark.slow
 def test_chapters_run_in_the_root_and_the_build_never_moves_the_process(tmp_path: Path,
                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
     """Chapters execute two at a time in threads: a chdir around one would move every thread's working folder."""

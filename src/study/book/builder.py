@@ -477,6 +477,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
     sources = {ch.stem: _read_notebook(ch.source) for ch in chs}
     last = [ch for ch in chs if _runs_last(sources[ch.stem])]  # they read what the others wrote
     order = [ch for ch in chs if ch not in last] + last
+    recommended = False  # made (or not needed): only then do the chapters it is made from keep their keys
     try:
         with tempfile.TemporaryDirectory(prefix="study-book-") as tmp:
             todo: list[tuple[int, Chapter, Path, dict[str, Any], dict[str, Any], dict[str, Any]]] = []
@@ -517,13 +518,16 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
                          cache_dir(root, data_dir))
         if {ch.stem for ch, *_ in done} & RECOMMENDING:
             steps["recommended model"] = _recommend(preset, cache_dir(root, data_dir), device, _sweep_measured(root))
+        recommended = True
     finally:
         # Keys again, once every chapter of this run has written what it writes: a chapter whose input folder a
         # later chapter adds to is not re-executed next time for that reason alone. Each was also written as its
         # chapter ended (but those the recommended model is made from), so a build killed before this point (a
-        # session's end) executes again only those and what it had not done.
+        # session's end) executes again only those and what it had not done; those get no key from a build
+        # stopped before the model was made (Ctrl-C), so the next one makes it.
         for ch, base, parameters, seconds in done:
-            _write_key(ch, base, parameters, root, seconds)
+            if recommended or ch.stem not in RECOMMENDING:
+                _write_key(ch, base, parameters, root, seconds)
         if timings:
             record = {"preset": preset, "device": device, "wall_seconds": round(time.perf_counter() - started, 3),
                       "cpu_seconds": round(_cpu_seconds(), 3), "chapters": timings, "stages": stages, "steps": steps,
