@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from study.core import cache
-from study.core.errors import ConfigError
+from study.core.errors import ConfigError, OutputError
 from study.methods import camera_cost, sweep, tracked, videos
 from study.see import render
 from study.simulate import measure as motion
@@ -247,7 +247,7 @@ def _same(a: list[camera_cost.Heights], b: list[camera_cost.Heights]) -> None:
                 bits(getattr(h.tracks[name], f.name), getattr(k.tracks[name], f.name), f"clip {i} {name}.{f.name}")
 
 
-def test_kept_heights_read_back_as_written(tmp_path):
+def test_kept_heights_read_back_as_written():
     n = 5
     ramp = np.linspace(0.0, 1.0, n)
     traj = Trajectory(t=ramp, u=ramp * 3, v=np.full(n, np.nan), status=np.ones(n, np.int8),
@@ -256,8 +256,7 @@ def test_kept_heights_read_back_as_written(tmp_path):
                       height_per_pixel=0.01, units="m", z=None, ground_z=0.1)
     h = camera_cost.Heights(ramp.astype(np.float32), {"floor marks": ramp, "floor marks found": "no marks found"},
                             {"floor marks": traj, "known camera": dataclasses.replace(traj, z=ramp)})
-    tracked.write(h, tmp_path / "h.npz")
-    back = tracked.read(tmp_path / "h.npz")
+    back = tracked.decode(tracked.encode(h))
     assert back.tracks["floor marks"].width == 640 and back.tracks["floor marks"].source == Path("clip.mp4")
     for t in h.tracks.values():  # numpy scalars come back as Python numbers of the same value
         t.fps, t.width = 60.0, 640
@@ -281,3 +280,13 @@ def test_the_kept_heights_are_the_plain_loops_to_the_bit_and_read_back_without_t
     bad.write_bytes(b"cut short")  # an entry that cannot be read is made again
     _same(plain, tracked.track_clips(clips, shape, progress=False))
     assert tracked.read(bad).paths.keys() == plain[0].paths.keys()
+    for f in bad.parent.glob("*.heights-*.npz"):
+        f.unlink()
+
+    def cannot_write(path, data):
+        raise OutputError(f"{path}: cannot be written")
+
+    with monkeypatch.context() as m:  # a data folder that cannot be written: tracked, not kept
+        m.setattr(cache, "write_bytes_atomic", cannot_write)
+        _same(plain, tracked.track_clips(clips, shape, progress=False))
+    assert not list(bad.parent.glob("*.heights-*.npz"))

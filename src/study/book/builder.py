@@ -189,7 +189,10 @@ def _fingerprint_path(p: Path) -> list[Any]:
     for f in sorted(p.rglob("*")):
         rel = f.relative_to(p)
         if f.is_file() and not any(part.startswith(".") for part in rel.parts):
-            st = f.stat()
+            try:
+                st = f.stat()
+            except FileNotFoundError:  # removed since the listing (a chapter still running replaced it)
+                continue
             files.append([rel.as_posix(), st.st_size, st.st_mtime_ns])
     return ["dir", files]
 
@@ -659,7 +662,8 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
                     if outcome == "executed":
                         done.append((ch, info["base"], info["parameters"], seconds))
                         if ch.stem not in RECOMMENDING:  # theirs wait for the recommended model made from them
-                            _write_key(ch, info["base"], info["parameters"], root, seconds)  # a killed build keeps it
+                            with contextlib.suppress(OSError):  # an input another chapter moves: the end writes it
+                                _write_key(ch, info["base"], info["parameters"], root, seconds)  # kept if killed
                         timings[ch.stem] = {**timings.get(ch.stem, {}), "seconds": round(seconds, 3), "cached": False}
                         tqdm.write(f"{where}: executed in {_duration(seconds)}", file=sys.stderr)
                         continue

@@ -102,8 +102,8 @@ class TrainConfig:
     'cosine': ``epochs`` epochs whatever happens (no early stopping), the rate rising linearly over
     ``warmup_epochs`` and then falling along a half cosine to ``lr_floor`` of itself."""
     warmup_epochs: int = 0
-    """With 'cosine': epochs of linear warm-up, the rate rising from ``lr / warmup_epochs`` to ``lr`` (at most
-    ``epochs - 1``: a short budget warms up for less)."""
+    """With 'cosine': epochs of linear warm-up, the rate rising from ``lr`` divided by their number to ``lr`` (at
+    most one epoch fewer than ``epochs``: a short budget warms up for less)."""
     lr_floor: float = 0.01
     """With 'cosine': the last epoch's rate over ``lr``."""
     average: Average = "ema"

@@ -11,17 +11,22 @@ is made again.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
+import io
 import json
 import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
+import scipy
 
 from study.core import cache
+from study.core.errors import OutputError
 from study.core.progress import Progress
 from study.methods import camera_cost
 from study.methods.sweep import Clip
@@ -42,16 +47,18 @@ def track_clips(clips: Sequence[Clip], shape: ObjectShape, progress: bool = True
 
 
 def heights(clip: Clip, shape: ObjectShape, code: str) -> camera_cost.Heights:
-    """One clip's heights by every path, from its cache entry, or tracked now and kept (then read back)."""
+    """One clip's heights by every path, from its cache entry, or tracked now and kept; either way as
+    :func:`decode` reads them."""
     path = entry(clip, shape, code)
     with cache.one_maker(path):  # two chapters of a build track a clip once
         try:
             return read(path)
         except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile):
             pass  # none yet, or not readable: made again
-        with cache.atomic_path(path) as tmp:
-            write(camera_cost.heights(clip, shape), tmp)
-        return read(path)
+        data = encode(camera_cost.heights(clip, shape))
+        with contextlib.suppress(OutputError):  # a folder that cannot be written: tracked, not kept
+            cache.write_bytes_atomic(path, data)
+        return decode(data)
 
 
 def entry(clip: Clip, shape: ObjectShape, code: str) -> Path:
@@ -59,12 +66,13 @@ def entry(clip: Clip, shape: ObjectShape, code: str) -> Path:
     v = clip.video
     key = cache.key({"video": _digest(v.path), "truth": _digest(v.truth) if v.truth else None,
                      "shot": dataclasses.asdict(clip.shot), "track": dataclasses.asdict(v.track_config()),
-                     "rest_height": v.rest_height, "shape": dataclasses.asdict(shape), "code": code})
+                     "rest_height": v.rest_height, "shape": dataclasses.asdict(shape), "code": code,
+                     "opencv": cv2.__version__, "numpy": np.__version__, "scipy": scipy.__version__})
     return v.path.with_name(f"{v.path.stem}.heights-{key}.npz")
 
 
-def write(h: camera_cost.Heights, path: str | Path) -> None:
-    """Write ``h`` to ``path`` (.npz, no pickles): its arrays as they are, everything else as JSON."""
+def encode(h: camera_cost.Heights) -> bytes:
+    """``h`` as the bytes of an .npz (no pickles): its arrays as they are, everything else as JSON."""
     arrays: dict[str, np.ndarray] = {"exact": h.exact}
     why: dict[str, str] = {}
     for name, got in h.paths.items():
@@ -84,13 +92,19 @@ def write(h: camera_cost.Heights, path: str | Path) -> None:
             else:
                 tracks[name][f.name] = str(value) if isinstance(value, Path) else value
     meta = {"why": why, "tracks": tracks, "paths": list(h.paths), "order": list(h.tracks)}
-    with open(path, "wb") as f:
-        np.savez(f, meta=np.array(json.dumps(meta)), **arrays)
+    buf = io.BytesIO()
+    np.savez(buf, meta=np.array(json.dumps(meta)), **arrays)
+    return buf.getvalue()
 
 
 def read(path: str | Path) -> camera_cost.Heights:
-    """The :class:`camera_cost.Heights` :func:`write` wrote to ``path``."""
-    with np.load(path, allow_pickle=False) as z:
+    """The :class:`camera_cost.Heights` kept at ``path``."""
+    return decode(Path(path).read_bytes())
+
+
+def decode(data: bytes) -> camera_cost.Heights:
+    """The :class:`camera_cost.Heights` that :func:`encode` made ``data`` of."""
+    with np.load(io.BytesIO(data), allow_pickle=False) as z:
         meta = json.loads(str(z["meta"]))
         arrays = {k: z[k] for k in z.files if k != "meta"}
     paths = {name: meta["why"][name] if name in meta["why"] else arrays[f"path/{name}"] for name in meta["paths"]}
