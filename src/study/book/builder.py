@@ -529,7 +529,7 @@ def execute(root: Path, preset: str, force: bool = False, only: list[str] | None
         # session's end) executes again only those and what it had not done; those get no key from a build
         # stopped before the model was made (Ctrl-C), so the next one makes it.
         for ch, base, parameters, seconds in done:
-            if recommended or ch.stem not in RECOMMENDING:
+            if _keyed_now(ch, recommended):
                 _write_key(ch, base, parameters, root, seconds)
         if timings:
             record = {"preset": preset, "device": device, "wall_seconds": round(time.perf_counter() - started, 3),
@@ -560,6 +560,12 @@ def _renders(path: Path) -> dict[str, float]:
 
 RECOMMENDING = {"realworld", "usercamera"}
 """The chapters whose runs the recommended model is chosen from: once one of them has executed, the build saves it."""
+
+
+def _keyed_now(ch: Chapter, recommended: bool) -> bool:
+    """Whether an executed chapter's key may be written now: any chapter's, but those the recommended model is made
+    from only once it is made (``recommended``), so that a build stopped before never leaves them cached without it."""
+    return recommended or ch.stem not in RECOMMENDING
 
 
 def _sweep_measured(root: Path) -> dict[str, dict[str, Any]]:
@@ -661,7 +667,7 @@ def _run_planned(root: Path, preset: str, chs: list[Chapter], last: list[Chapter
                     outcome, seconds = f.result()
                     if outcome == "executed":
                         done.append((ch, info["base"], info["parameters"], seconds))
-                        if ch.stem not in RECOMMENDING:  # theirs wait for the recommended model made from them
+                        if _keyed_now(ch, recommended=False):
                             with contextlib.suppress(OSError):  # an input another chapter moves: the end writes it
                                 _write_key(ch, info["base"], info["parameters"], root, seconds)  # kept if killed
                         timings[ch.stem] = {**timings.get(ch.stem, {}), "seconds": round(seconds, 3), "cached": False}

@@ -120,8 +120,5 @@ def decode(data: bytes) -> camera_cost.Heights:
 
 def _digest(path: Path) -> str:
     """The SHA-256 of a file's bytes."""
-    h = hashlib.sha256()
     with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+        return hashlib.file_digest(f, "sha256").hexdigest()
