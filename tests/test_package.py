@@ -136,6 +136,7 @@ def test_every_readme_recipe_runs_as_written(tmp_path):
     (tmp_path / "recipe.py").write_text(code)  # a plain script, as a reader saves it
     proc = subprocess.run([sys.executable, "recipe.py"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
+    assert re.search(r"accuracy \d+\.\d% \[95 % CI \d+\.\d%, \d+\.\d%\] on \d+ throws", proc.stdout), proc.stdout
     assert all((tmp_path / m / "weights.pt").is_file() for m in ("my-model", "my-video-model"))
     assert (tmp_path / "my-throws.npz").is_file()
     assert (tmp_path / "data").is_dir()  # the recipe's cache went where it ran, not into the project

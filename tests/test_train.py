@@ -205,6 +205,9 @@ def test_cli_train_and_evaluate(tmp_path, smoke_dataset, capsys):
     res = json.loads(capsys.readouterr().out)
     assert set(res["per_class_accuracy"]) == {"light", "heavy"} and np.sum(res["confusion"]) == len(smoke_dataset.test)
     assert res["trained_on"] == res["data_key"] == smoke_dataset.key
+    iv = res["accuracy_interval"]  # a number without its spread is not a result
+    assert iv["lo"] <= res["accuracy"] <= iv["hi"] and iv["hi"] - iv["lo"] > 0.1, "a handful of test throws: wide"
+    assert iv["method"].startswith("Wilson interval, ")
     assert train.load(tmp_path / "m").dims == "z"
 
 
