@@ -199,6 +199,7 @@ def test_cli_train_and_evaluate(tmp_path, smoke_dataset, capsys):
     got = capsys.readouterr()
     out = json.loads(got.out)
     assert out["model"] == str(tmp_path / "m") and out["failed"] is True, "3 validation throws cannot show learning"
+    assert out["val_accuracy_interval"]["lo"] <= out["val_accuracy"] <= out["val_accuracy_interval"]["hi"]
     assert f"{int(np.bincount(smoke_dataset.train.y).min())} training throws a class" in got.err
     assert "study synth --train-per-class 200" in got.err, "a smoke-sized data set says how many throws it needs"
     assert cli.main(["evaluate", "--model", str(tmp_path / "m"), "--data", path]) == 0

@@ -225,7 +225,8 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
             "directory (weights, config, normalisation, history, data key) atomically. Every option "
             "below is a field of study.learn.config.TrainConfig, with its default: the study's protocol "
             "(Table 1's configuration on the paper preset). Prints JSON: the model, its best epoch, its "
-            "validation accuracy and whether it failed to train (then a warning says what to change)."
+            "validation accuracy with its 95 % Wilson interval and whether it failed to train (then a warning says "
+            "what to change)."
         ),
     )
     first = p.add_argument_group("what to train (most users set only these)")
@@ -260,10 +261,21 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
                       f"throws from about {ENOUGH_THROWS} a class (scripts/how_many_throws.py measures it): make more "
                       f"with `study synth --train-per-class {ENOUGH_THROWS} --out FILE`")
         print(json.dumps({"model": str(a.out), "best_epoch": tm.best_epoch, "val_accuracy": tm.val_accuracy,
+                          "val_accuracy_interval": _interval(round(tm.val_accuracy * tm.n_val), tm.n_val),
                           "failed": tm.failed}))
         return 0
 
     p.set_defaults(run=run)
+
+
+def _interval(right: int, n: int) -> dict[str, float | str] | None:
+    """The 95 % Wilson interval of ``right`` of ``n`` as JSON fields (lo, hi: fractions; method); None for n = 0."""
+    from study.learn.metrics import wilson
+
+    if not n:
+        return None
+    iv = wilson(right, n)
+    return {"lo": iv.lo, "hi": iv.hi, "method": iv.method}
 
 
 ENOUGH_THROWS = 200
@@ -420,15 +432,14 @@ def _add_evaluate(sub: argparse._SubParsersAction) -> None:
         import json
 
         from study.learn import train
-        from study.learn.metrics import wilson
         from study.simulate import synth
 
         tm = train.load(a.model)
         ds = synth.load(a.data)
         res = train.evaluate(tm, ds.test)
-        iv = wilson(sum(row[k] for k, row in enumerate(res["confusion"])), res["n"])  # right: the diagonal
-        res.update(accuracy_interval={"lo": iv.lo, "hi": iv.hi, "method": iv.method},
-                   model=str(a.model), data=str(a.data), data_key=ds.key, trained_on=tm.data_key)
+        right = sum(row[k] for k, row in enumerate(res["confusion"]))  # the diagonal
+        res.update(accuracy_interval=_interval(right, res["n"]), model=str(a.model), data=str(a.data),
+                   data_key=ds.key, trained_on=tm.data_key)
         print(json.dumps(res, indent=1))
         return 0
 
