@@ -269,13 +269,11 @@ def _add_train(sub: argparse._SubParsersAction) -> None:
 
 
 def _interval(right: int, n: int) -> dict[str, float | str] | None:
-    """The 95 % Wilson interval of ``right`` of ``n`` as JSON fields (lo, hi: fractions; method); None for n = 0."""
+    """The 95 % Wilson interval of ``right`` of ``n`` as JSON fields (``Interval.to_dict``); None for n = 0 (a
+    model saved before its validation size was recorded)."""
     from study.learn.metrics import wilson
 
-    if not n:
-        return None
-    iv = wilson(right, n)
-    return {"lo": iv.lo, "hi": iv.hi, "method": iv.method}
+    return wilson(right, n).to_dict() if n else None
 
 
 ENOUGH_THROWS = 200
