@@ -44,9 +44,14 @@ def block(path: Path, commit: str) -> str:
         n = num(name)
         return f"**{n.verdict}**" if n is not None and n.verdict else ""
 
+    def unsettled(dims: str) -> str:
+        n = num(f"table1.{dims}.unsettled_picks")
+        return "" if n is None or not n.value else f" ({n.value:.0f} of the runs validation picks not settled)"
+
     rows = [
-        ("Table 1, X, Y, Z", "81 %", _pct(num("table1.xyz.paper_way")), verdict("table1.xyz.paper_way")),
-        ("Table 1, Z only", "78 %", _pct(num("table1.z.paper_way")), verdict("table1.z.paper_way")),
+        ("Table 1, X, Y, Z", "81 %", _pct(num("table1.xyz.paper_way")) + unsettled("xyz"),
+         verdict("table1.xyz.paper_way")),
+        ("Table 1, Z only", "78 %", _pct(num("table1.z.paper_way")) + unsettled("z"), verdict("table1.z.paper_way")),
     ]
     on, off = num("motion.ceiling.air_on"), num("motion.ceiling.air_off")
     if on is not None and off is not None:

@@ -504,6 +504,8 @@ def test_repo_book_builds_with_smoke_preset(tmp_path: Path, monkeypatch: pytest.
     assert "`abc1234`" in text and "| Table 1, Z only | 78 % |" in text and "STALE-BLOCK" not in text
     recipe = "usercamera.sweep.kind.positions-any-camera.mean" in built  # the README recipe's kind, where scored
     assert ("a model like the recipe's below" in text) == recipe, "the recipe's model on video, when measured"
+    late = built["table1.z.unsettled_picks"].value + built["table1.xyz.unsettled_picks"].value
+    assert ("runs validation picks not settled" in text) == (late > 0), "Table 1's rows say when a pick had not settled"
     decided = [n for n in built.values() if n.verdict]
     assert len(decided) >= 15 and results.recompute(built) == [], "every verdict follows from its stored inputs"
     page = summary.compute(tmp_path / results.FILE, "smoke")  # the summary page's rows, read as typed results

@@ -173,3 +173,40 @@ def test_the_figure_draws_the_papers_band_beside_every_run(t1):
     dots = [ln for ln in left.get_lines() if ln.get_marker() in ("o", "x") and ln.get_mfc() != "none"]
     assert len(dots) == n_runs, "every run of the paper's network drawn"
     plt.close(fig)
+
+
+def test_a_pick_still_climbing_when_its_epochs_ran_out_is_named_not_settled(t1, tmp_path):
+    import json
+
+    from fake_runs import record
+
+    from study.core.cache import write_text_atomic
+    from study.runs import records
+
+    runner = Runner.open("smoke", data_dir=tmp_path)
+    cfg = paper.seed_configs(t1.config, (0,), ("z",))[0]
+    cache_records(runner, [cfg])
+    assert table1._unsettled(runner, tuple(runner.rows([cfg]))) == (False,), "stopped early: flattened"
+    climbing = [{"epoch": e, "val_loss": 0.45, "val_accuracy": 0.5 + 0.02 * e} for e in range(cfg.epochs)]
+    for test in (True, False):  # the same run, its budget spent with its validation accuracy still rising
+        rec = record(runner.dataset, cfg, test, 0.7) | {"epochs_run": cfg.epochs, "history": climbing}
+        write_text_atomic(records.record_path(runner.data_dir, rec["key"]), json.dumps(rec) + "\n")
+    assert table1._unsettled(runner, tuple(runner.rows([cfg]))) == (True,)
+
+
+def test_the_unsettled_picks_sentence_names_each_row_and_data_set(t1):
+    assert t1.unsettled_picks.startswith(f"Each of the {5 * t1.n_data} runs validation picks had flattened")
+    assert t1.numbers.rows["z"].unsettled_picks.value == 0 and t1.numbers.rows["z"].unsettled_picks.unit == "count"
+    late = dataclasses.replace(t1, unsettled={**t1.unsettled, ("positions", "z"): (False, True)})
+    z = t1.seeds["positions"].per_data("z")[1].where(seed=t1.picked["positions", "z"][1])[0]
+    assert f"1 had not flattened when their {t1.epochs} epochs" in late.unsettled_picks
+    assert f"(Z only, positions, data set 2: {100 * z.accuracy:.1f} %;" in late.unsettled_picks
+    assert "the estimate of that row" in late.unsettled_picks
+
+
+def test_the_findings_say_which_table_1_row_leans_on_an_unsettled_pick():
+    from study.book import summary
+
+    assert summary.unsettled_clause({}) == summary.unsettled_clause({"xyz": 0}) == ""
+    assert summary.unsettled_clause({"xyz": 0, "z": 1}) == (
+        "; of the runs validation picks, 1 behind Z alone had not flattened when their epochs ran out")

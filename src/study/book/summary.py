@@ -227,6 +227,15 @@ def _both(numbers: Mapping[str, Number]) -> str:
     return _BOTH.get(a or "", f"both {a}") if a == b else f"X, Y, Z {a}, Z {b}"
 
 
+def unsettled_clause(unsettled: Mapping[str, int]) -> str:
+    """'' or, for Table 1's rows (input -> how many of its runs validation picks had not flattened when their epoch
+    budget ran out), the clause the findings add after the rows' verdicts."""
+    if not any(unsettled.values()):
+        return ""
+    rows = " and ".join(f"{n} behind {'X, Y, Z' if d == 'xyz' else 'Z alone'}" for d, n in unsettled.items() if n)
+    return f"; of the runs validation picks, {rows} had not flattened when their epochs ran out"
+
+
 @dataclass(frozen=True)
 class Best:
     """A column's best learner and its accuracy."""
@@ -258,6 +267,9 @@ class Findings:
     """The calibrated camera's height error, metres."""
     sweep: usercamera.Sweep | None = None
     """The camera sweep: a camera nobody measured (None: not in the results file)."""
+    unsettled: Mapping[str, int] = dataclasses.field(default_factory=dict)
+    """Table 1's rows whose runs validation picks include some that had not flattened when their epoch budget ran
+    out (``study.runs.failures.unsettled``): input -> how many (only those with one or more)."""
 
     @classmethod
     def of(cls, c: Chapters, rows: tuple[Row, ...]) -> Findings:
@@ -269,7 +281,9 @@ class Findings:
                    {d: c.engine.table1[d].paper_way for d in table1.ORDER},  # type: ignore[index]
                    {a: getattr(m.ceiling, a) for a in airs}, c.cues.drag_rule.exact,
                    {a: m.learners["peephole_positions"][a]["exact"] for a in airs},  # type: ignore[index]
-                   camera, m.noise["calibrated"], c.usercamera.sweep)  # type: ignore[index]
+                   camera, m.noise["calibrated"], c.usercamera.sweep,  # type: ignore[index]
+                   {d: int(r.unsettled_picks.value) for d in table1.ORDER  # type: ignore[index]
+                    if (r := c.table1.rows[d]).unsettled_picks is not None and r.unsettled_picks.value})
 
     @property
     def text(self) -> str:
@@ -284,7 +298,7 @@ class Findings:
         return (f"The paper trains a small recurrent network on simulated throws and reports "
                 f"{pct(paper.TABLE1['xyz'], 0)} with X, Y, Z and {pct(paper.TABLE1['z'], 0)} with the height "
                 f"alone (Table 1). Of its {sum(n.values())} tables, figures and claims, {held}. Our Table 1 scores "
-                f"{fmt(t['xyz'])} and {fmt(t['z'])} ({_both(t)}); in Bullet, the paper's engine, {fmt(b['xyz'])} and "
+                f"{fmt(t['xyz'])} and {fmt(t['z'])} ({_both(t)}{unsettled_clause(self.unsettled)}); in Bullet, the paper's engine, {fmt(b['xyz'])} and "
                 f"{fmt(b['z'])} ({_both(b)}). What the motion allows is exact: no classifier can beat "
                 f"{fmt_value(self.ceiling['air_off'].value)} without air, {fmt_value(self.ceiling['air_on'].value)} "
                 f"with it, and there one threshold on the first fall's acceleration already scores "

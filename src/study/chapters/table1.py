@@ -59,7 +59,7 @@ from study.report.table1 import (
     Velocity,
 )
 from study.report.text import Table, pct, pct_ci, pct_pm, points, runs_note, seeds_ci
-from study.runs import paper, stats
+from study.runs import failures, paper, stats
 from study.runs.runner import Runner
 from study.runs.runtable import Fitted, Run, Runs
 
@@ -349,6 +349,8 @@ class Table1:
     """What turning a throw about the vertical does to each X, Y, Z network."""
     schedule_table: Table
     """The velocity network's schedules on validation."""
+    unsettled: dict[tuple[Network, Dims], tuple[bool, ...]] = dataclasses.field(default_factory=dict)
+    """Per row with a validation-pick estimate: whether each data set's pick had not flattened at its epoch cap."""
 
     @property
     def figure(self) -> tuple[FigureRow, ...]:
@@ -397,6 +399,25 @@ class Table1:
         return (f"{head}; of the {self.grid_runs} grid runs, {self.grid_failed}. The study's training protocol "
                 f"stalled {self.stalls_study} of {self.n_protocol_runs} validation runs, the first "
                 f"{self.stalls_first} (below).")
+
+    @property
+    def unsettled_picks(self) -> str:
+        """Which of the runs validation picks had not flattened when their epoch budget ran out, by row and data set;
+        or that none had."""
+        late = [(c, i + 1, r) for c in self.figure for i, (runs, seed, u) in
+                enumerate(zip(c.runs, c.picked, self.unsettled.get((c.network, c.dims), ()))) if u
+                for r in runs if r.seed == seed]
+        n = sum(len(v) for v in self.unsettled.values())
+        if not late:
+            return f"Each of the {n} runs validation picks had flattened before it stopped."
+        which = "; ".join(f"{paper.DIMS_NAMES[c.dims]}, {SHORT_NAMES[c.network]}, data set {i}: "
+                          f"{100 * r.accuracy:.1f} %"  # type: ignore[operator]
+                          for c, i, r in late)
+        rows = len({(c.network, c.dims) for c, _, _ in late})
+        return (f"Of the {n} runs validation picks, {len(late)} had not flattened when their {self.epochs} epochs ran "
+                f"out, their validation accuracy still climbing or swinging ({which}; *not settled* in the table "
+                f"below), so the estimate of {'that row' if rows == 1 else 'those rows'} leans on "
+                f"{'a network' if len(late) == 1 else 'networks'} more epochs could still move.")
 
     def row(self, network: Network, dims: Dims) -> Row | None:
         """The reported row of ``network`` on ``dims`` (None where the chapter has none: the rotated network's, and
@@ -633,11 +654,22 @@ def _protocols(protocols: Runs) -> tuple[dict[ProtocolKey, dict[Dims, ProtocolRo
     return numbers, table, facts
 
 
-def _row(runner: Runner, inputs: Inputs, cfg: TrainConfig, s: Seeds, d: Dims) -> tuple[Row, dict, dict, tuple[int, ...]]:
+def _unsettled(runner: Runner, picked: tuple[Run, ...]) -> tuple[bool, ...]:
+    """Whether each run of ``picked`` (data set i's pick, in the preset's order of data sets) had not flattened when
+    its epoch budget ran out, by the rule the builder counts such runs by (``study.runs.failures.unsettled``), read
+    from its record."""
+    seeds = runner.preset.data_seeds
+    on = [runner] + [runner.with_data_seed(s) for s in seeds[1:len(picked)]]
+    return tuple(failures.unsettled(r.runs([run.config], desc="Table 1")[0]) for r, run in zip(on, picked))
+
+
+def _row(runner: Runner, inputs: Inputs, cfg: TrainConfig, s: Seeds, d: Dims
+         ) -> tuple[Row, dict, dict, tuple[int, ...], tuple[bool, ...]]:
     p, ds = runner.preset, runner.dataset
     first = s.first.where(dims=d)
     per_data = s.per_data(d)
     pick = stats.validation_pick(per_data)
+    unsettled = _unsettled(runner, pick.picked)
     summ = stats.summary(first)
     t = t_interval(first.accuracies())
     balanced = [np.stack([r.correct for r in g if r.seed in p.grid_seeds]) for g in per_data]
@@ -658,18 +690,20 @@ def _row(runner: Runner, inputs: Inputs, cfg: TrainConfig, s: Seeds, d: Dims) ->
         number(summ.std, "sample standard deviation over seeds"),
         count(summ.failed + sum(g.n_failed for g in per_data[1:]), "runs that failed to train, every data set"),
         number(float(np.ptp(first.accuracies())), f"max minus min test accuracy over {summ.n} seeds, {where}"),
+        count(sum(unsettled), f"runs validation picks, one per data set, not flattened at their epoch cap, {where}"),
     )
     table = {"inputs": INPUT_NAMES[inputs], "dims": paper.DIMS_NAMES[d],
              "paper": pct(paper.TABLE1[d], 0) if inputs == "positions" else "—",
              "paper_way": pct_ci(pick.interval),
-             "picked": ", ".join(f"{100 * r.accuracy:.1f}" for r in pick.picked),  # type: ignore[operator]
+             "picked": ", ".join(f"{100 * r.accuracy:.1f}" + (" (not settled)" if u else "")  # type: ignore[operator]
+                                 for r, u in zip(pick.picked, unsettled)),
              "mean": pct_ci(summ.interval),
              "verdict": f"**{paper_way.verdict}**" if paper_way.verdict else "(beyond the paper)"}
     spread = {"inputs": INPUT_NAMES[inputs], "dims": paper.DIMS_NAMES[d],
               "seeds": ", ".join(f"{100 * r.accuracy:.1f}" for r in first),  # type: ignore[operator]
               "t": pct_ci(t), "across": pct_ci(across), "share": f"{100 * share['share']:.0f} %",
               "runs": runs_note(summ) or "all trained"}
-    return row, table, spread, tuple(r.seed for r in pick.picked)
+    return row, table, spread, tuple(r.seed for r in pick.picked), unsettled
 
 
 def _ablation(runner: Runner, winners: dict[Cell, TrainConfig]) -> tuple[Ablation, Table, dict[Cell, Interval]]:
@@ -779,10 +813,11 @@ def compute(runner: Runner) -> Table1:
                                    "speed": seed_runs(runner, cfgs["speed"], ("xyz",)),
                                    "rotated": seed_runs(runner, cfgs["rotated"], ("xyz",), every_data=False)}
     rows: dict[Inputs, dict[Dims, Row]] = {"positions": {}, "velocity": {}, "speed": {}}
-    table, spread, picked = [], [], {}
+    table, spread, picked, unsettled = [], [], {}, {}
     for inputs, dims in (("positions", ORDER), ("velocity", ORDER), ("speed", ("xyz",))):
         for d in dims:
-            rows[inputs][d], t_row, s_row, picked[inputs, d] = _row(runner, inputs, cfgs[inputs], seeds[inputs], d)
+            rows[inputs][d], t_row, s_row, picked[inputs, d], unsettled[inputs, d] = _row(
+                runner, inputs, cfgs[inputs], seeds[inputs], d)
             table.append(t_row)
             spread.append(s_row)
     first = {k: s.first for k, s in seeds.items()}
@@ -828,4 +863,4 @@ def compute(runner: Runner) -> Table1:
         abl_diffs=abl_diffs, base_beats=beats, vel_xyz_accuracies=tuple(vel_xyz.accuracies().tolist()),
         vel_failed_xyz=vel_xyz.n_failed, shares=tuple(r["share"] for r in spread if r["share"] != "—"),
         speed_xyz_accuracies=tuple(first["speed"].accuracies().tolist()), heading_table=heading_table,
-        schedule_table=schedule_table, **facts)  # type: ignore[arg-type]
+        schedule_table=schedule_table, unsettled=unsettled, **facts)  # type: ignore[arg-type]

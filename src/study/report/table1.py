@@ -41,6 +41,10 @@ class Row(Reported):
     spread: Number | None = None
     """Max minus min test accuracy over the first data set's seeds: how far one seed's number can land from
     another's (the study's bar: 2 points)."""
+    unsettled_picks: Number | None = None
+    """Of the runs validation picks (one per data set), those whose validation curve had not flattened when their
+    epoch budget ran out (``study.runs.failures.unsettled``): :attr:`paper_way` leans on them (None: a results file
+    from before they were counted)."""
 
 
 @dataclass(frozen=True)
