@@ -199,7 +199,8 @@ def test_the_unsettled_picks_sentence_names_each_row_and_data_set(t1):
     assert t1.numbers.rows["z"].unsettled_picks.value == 0 and t1.numbers.rows["z"].unsettled_picks.unit == "count"
     late = dataclasses.replace(t1, unsettled={**t1.unsettled, ("positions", "z"): (False, True)})
     z = t1.seeds["positions"].per_data("z")[1].where(seed=t1.picked["positions", "z"][1])[0]
-    assert f"1 had not flattened when their {t1.epochs} epochs" in late.unsettled_picks
+    assert f"1 had not flattened when its {t1.epochs} epochs" in late.unsettled_picks
+    assert '"not settled"' in late.unsettled_picks and "*" not in late.unsettled_picks, "glued as text: no Markdown"
     assert f"(Z only, positions, data set 2: {100 * z.accuracy:.1f} %;" in late.unsettled_picks
     assert "the estimate of that row" in late.unsettled_picks
 
@@ -209,4 +210,6 @@ def test_the_findings_say_which_table_1_row_leans_on_an_unsettled_pick():
 
     assert summary.unsettled_clause({}) == summary.unsettled_clause({"xyz": 0}) == ""
     assert summary.unsettled_clause({"xyz": 0, "z": 1}) == (
-        "; of the runs validation picks, 1 behind Z alone had not flattened when their epochs ran out")
+        "; of the runs validation picks, 1 behind Z alone had not flattened when its epochs ran out")
+    assert summary.unsettled_clause({"xyz": 1, "z": 2}).endswith("1 behind X, Y, Z and 2 behind Z alone had not "
+                                                                 "flattened when their epochs ran out")

@@ -233,7 +233,8 @@ def unsettled_clause(unsettled: Mapping[str, int]) -> str:
     if not any(unsettled.values()):
         return ""
     rows = " and ".join(f"{n} behind {'X, Y, Z' if d == 'xyz' else 'Z alone'}" for d, n in unsettled.items() if n)
-    return f"; of the runs validation picks, {rows} had not flattened when their epochs ran out"
+    return (f"; of the runs validation picks, {rows} had not flattened when "
+            f"{'its' if sum(unsettled.values()) == 1 else 'their'} epochs ran out")
 
 
 @dataclass(frozen=True)

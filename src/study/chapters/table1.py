@@ -414,10 +414,12 @@ class Table1:
                           f"{100 * r.accuracy:.1f} %"  # type: ignore[operator]
                           for c, i, r in late)
         rows = len({(c.network, c.dims) for c, _, _ in late})
-        return (f"Of the {n} runs validation picks, {len(late)} had not flattened when their {self.epochs} epochs ran "
-                f"out, their validation accuracy still climbing or swinging ({which}; *not settled* in the table "
-                f"below), so the estimate of {'that row' if rows == 1 else 'those rows'} leans on "
-                f"{'a network' if len(late) == 1 else 'networks'} more epochs could still move.")
+        one = len(late) == 1
+        return (f"Of the {n} runs validation picks, {len(late)} had not flattened when {'its' if one else 'their'} "
+                f"{self.epochs} epochs ran out, {'its' if one else 'their'} validation accuracy still climbing or "
+                f"swinging ({which}; marked \"not settled\" in the table below), so the estimate of "
+                f"{'that row' if rows == 1 else 'those rows'} leans on {'a network' if one else 'networks'} more "
+                "epochs could still move.")
 
     def row(self, network: Network, dims: Dims) -> Row | None:
         """The reported row of ``network`` on ``dims`` (None where the chapter has none: the rotated network's, and
