@@ -269,8 +269,8 @@ class Findings:
     sweep: usercamera.Sweep | None = None
     """The camera sweep: a camera nobody measured (None: not in the results file)."""
     unsettled: Mapping[str, int] = dataclasses.field(default_factory=dict)
-    """Table 1's rows whose runs validation picks include some that had not flattened when their epoch budget ran
-    out (``study.runs.failures.unsettled``): input -> how many (only those with one or more)."""
+    """Table 1's runs validation picks that had not flattened when their epoch budget ran out
+    (``study.runs.failures.unsettled``): input -> how many (none for a results file from before they were counted)."""
 
     @classmethod
     def of(cls, c: Chapters, rows: tuple[Row, ...]) -> Findings:
@@ -283,8 +283,8 @@ class Findings:
                    {a: getattr(m.ceiling, a) for a in airs}, c.cues.drag_rule.exact,
                    {a: m.learners["peephole_positions"][a]["exact"] for a in airs},  # type: ignore[index]
                    camera, m.noise["calibrated"], c.usercamera.sweep,  # type: ignore[index]
-                   {d: int(r.unsettled_picks.value) for d in table1.ORDER  # type: ignore[index]
-                    if (r := c.table1.rows[d]).unsettled_picks is not None and r.unsettled_picks.value})
+                   {d: int(n.value) for d in table1.ORDER  # type: ignore[index]
+                    if (n := c.table1.rows[d].unsettled_picks) is not None})
 
     @property
     def text(self) -> str:
@@ -300,9 +300,10 @@ class Findings:
                 f"{pct(paper.TABLE1['xyz'], 0)} with X, Y, Z and {pct(paper.TABLE1['z'], 0)} with the height "
                 f"alone (Table 1). Of its {sum(n.values())} tables, figures and claims, {held}. Our Table 1 scores "
                 f"{fmt(t['xyz'])} and {fmt(t['z'])} ({_both(t)}{unsettled_clause(self.unsettled)}); in Bullet, the "
-                f"paper's engine, {fmt(b['xyz'])} and {fmt(b['z'])} ({_both(b)}). What the motion allows is exact: no classifier can beat "
-                f"{fmt_value(self.ceiling['air_off'].value)} without air, {fmt_value(self.ceiling['air_on'].value)} "
-                f"with it, and there one threshold on the first fall's acceleration already scores "
+                f"paper's engine, {fmt(b['xyz'])} and {fmt(b['z'])} ({_both(b)}). What the motion allows is exact: "
+                f"no classifier can beat {fmt_value(self.ceiling['air_off'].value)} without air, "
+                f"{fmt_value(self.ceiling['air_on'].value)} with it, and there one threshold on the first fall's "
+                f"acceleration already scores "
                 f"{fmt(self.drag_rule)}; the paper's network reaches {fmt(self.network['air_on'])} with air and "
                 f"{fmt(self.network['air_off'])} without. A camera leaves less: through the calibrated camera "
                 f"({_mm(self.camera_error)} of height error) the best learner scores {fmt(on.accuracy)} with air "

@@ -404,9 +404,11 @@ class Table1:
     def unsettled_picks(self) -> str:
         """Which of the runs validation picks had not flattened when their epoch budget ran out, by row and data set;
         or that none had."""
-        late = [(c, i + 1, r) for c in self.figure for i, (runs, seed, u) in
-                enumerate(zip(c.runs, c.picked, self.unsettled.get((c.network, c.dims), ()))) if u
-                for r in runs if r.seed == seed]
+        late = []
+        for c in self.figure:
+            flags = self.unsettled.get((c.network, c.dims), ())
+            late += [(c, i, runs.where(seed=seed)[0])
+                     for i, (runs, seed, u) in enumerate(zip(c.runs, c.picked, flags), 1) if u]
         n = sum(len(v) for v in self.unsettled.values())
         if not late:
             return f"Each of the {n} runs validation picks had flattened before it stopped."
